@@ -1,0 +1,505 @@
+//! Every user-facing parameter: its meaning, unit and valid range, in one place.
+//!
+//! UI sliders, preset and scene-file validation and the command line all read the ranges from the
+//! [`Spec`] constants below; defaults live only in the `Default` impls.
+//!
+//! Units: lengths are *scene units* (metres for the shipped scenes); coefficients are per scene unit.
+//! Radiometry is linear RGB: a point light has a radiant intensity (W/sr per channel), a directional
+//! light an irradiance (W/m^2 per channel); the images hold radiance (W/(m^2 sr)).
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// The documentation and valid range of one scalar parameter (applies per channel for RGB ones).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spec {
+    /// Field name as written in presets and scene files.
+    pub name: &'static str,
+    /// Unit shown next to the value.
+    pub unit: &'static str,
+    /// Inclusive lower bound.
+    pub min: f64,
+    /// Inclusive upper bound.
+    pub max: f64,
+    /// One sentence: what it means.
+    pub doc: &'static str,
+}
+
+/// A value outside its [`Spec`], or a combination that cannot be rendered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    #[error("{name} = {value} is out of range [{min}, {max}] {unit}")]
+    OutOfRange { name: &'static str, value: f64, min: f64, max: f64, unit: &'static str },
+    #[error("{name} is not a finite number ({value})")]
+    NotFinite { name: &'static str, value: f64 },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Spec {
+    /// Checks one value against the range.
+    pub fn check(&self, value: f64) -> Result<(), ParamError> {
+        if !value.is_finite() {
+            return Err(ParamError::NotFinite { name: self.name, value });
+        }
+        if value < self.min || value > self.max {
+            return Err(ParamError::OutOfRange {
+                name: self.name,
+                value,
+                min: self.min,
+                max: self.max,
+                unit: self.unit,
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks the three channels of an RGB value.
+    pub fn check_rgb(&self, value: Vec3) -> Result<(), ParamError> {
+        for c in value.to_array() {
+            self.check(c as f64)?;
+        }
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Medium
+// ---------------------------------------------------------------------------------------------
+
+/// Phase function: the angular distribution of single scattering, normalised so that its integral
+/// over the sphere is 1 (unit 1/sr). `cos_theta` is the cosine of the deflection angle: 1 means the
+/// light keeps going in its direction (forward scattering).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum Phase {
+    /// `1 / (4 pi)`.
+    Isotropic,
+    /// Henyey-Greenstein, `(1 - g^2) / (4 pi (1 + g^2 - 2 g cos)^(3/2))`.
+    HenyeyGreenstein { g: f32 },
+    /// Schlick's approximation of HG, `(1 - k^2) / (4 pi (1 - k cos)^2)` with `k = 1.55 g - 0.55 g^3`.
+    Schlick { g: f32 },
+    /// Cornette-Shanks, `3 (1 - g^2) (1 + cos^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g cos)^(3/2))`.
+    CornetteShanks { g: f32 },
+    /// Rayleigh, `3 (1 + cos^2) / (16 pi)`.
+    Rayleigh,
+}
+
+impl Phase {
+    /// Asymmetry `g` of the lobed phase functions: -1 back, 0 isotropic, 1 forward.
+    pub const G: Spec = Spec {
+        name: "g",
+        unit: "",
+        min: -0.999,
+        max: 0.999,
+        doc: "Asymmetry of the lobe: negative scatters back toward the light, positive forward.",
+    };
+
+    /// All kinds, in UI order, with their file names.
+    pub const KINDS: [&'static str; 5] =
+        ["isotropic", "henyey-greenstein", "schlick", "cornette-shanks", "rayleigh"];
+
+    /// Stable small integer used by the shaders (`PHASE_*` in `common.wgsl`).
+    pub fn id(&self) -> u32 {
+        match self {
+            Phase::Isotropic => 0,
+            Phase::HenyeyGreenstein { .. } => 1,
+            Phase::Schlick { .. } => 2,
+            Phase::CornetteShanks { .. } => 3,
+            Phase::Rayleigh => 4,
+        }
+    }
+
+    /// The asymmetry parameter, 0 where the function has none.
+    pub fn g(&self) -> f32 {
+        match *self {
+            Phase::HenyeyGreenstein { g } | Phase::Schlick { g } | Phase::CornetteShanks { g } => g,
+            Phase::Isotropic | Phase::Rayleigh => 0.0,
+        }
+    }
+
+    /// Evaluates the normalised phase function in `f64` (used by the reference and the tests).
+    pub fn eval(&self, cos_theta: f64) -> f64 {
+        let c = cos_theta.clamp(-1.0, 1.0);
+        match *self {
+            Phase::Isotropic => 1.0 / (4.0 * PI),
+            Phase::HenyeyGreenstein { g } => {
+                let g = g as f64;
+                let den = 1.0 + g * g - 2.0 * g * c;
+                (1.0 - g * g) / (4.0 * PI * den * den.sqrt())
+            }
+            Phase::Schlick { g } => {
+                let g = g as f64;
+                let k = 1.55 * g - 0.55 * g * g * g;
+                let den = 1.0 - k * c;
+                (1.0 - k * k) / (4.0 * PI * den * den)
+            }
+            Phase::CornetteShanks { g } => {
+                let g = g as f64;
+                let den = 1.0 + g * g - 2.0 * g * c;
+                3.0 * (1.0 - g * g) * (1.0 + c * c) / (8.0 * PI * (2.0 + g * g) * den * den.sqrt())
+            }
+            Phase::Rayleigh => 3.0 * (1.0 + c * c) / (16.0 * PI),
+        }
+    }
+
+    /// Checks `g` against its range.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        Self::G.check(self.g() as f64)
+    }
+}
+
+impl Default for Phase {
+    fn default() -> Self {
+        Phase::HenyeyGreenstein { g: 0.3 }
+    }
+}
+
+/// A homogeneous participating medium (single scattering).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Medium {
+    /// Scattering coefficient `sigma_s` per RGB channel.
+    pub scattering: Vec3,
+    /// Absorption coefficient `sigma_a` per RGB channel.
+    pub absorption: Vec3,
+    /// Multiplies both coefficients: a single knob for "thicker/thinner".
+    pub density: f32,
+    /// Angular distribution of scattering.
+    pub phase: Phase,
+}
+
+impl Medium {
+    pub const SCATTERING: Spec = Spec {
+        name: "scattering",
+        unit: "1/unit",
+        min: 0.0,
+        max: 1.0e4,
+        doc: "Scattering coefficient sigma_s per channel: fraction of light scattered per unit length.",
+    };
+    pub const ABSORPTION: Spec = Spec {
+        name: "absorption",
+        unit: "1/unit",
+        min: 0.0,
+        max: 1.0e4,
+        doc: "Absorption coefficient sigma_a per channel: fraction of light absorbed per unit length.",
+    };
+    pub const DENSITY: Spec = Spec {
+        name: "density",
+        unit: "x",
+        min: 0.0,
+        max: 1.0e3,
+        doc: "Multiplier applied to both coefficients.",
+    };
+
+    /// `sigma_s * density`.
+    pub fn sigma_s(&self) -> Vec3 {
+        self.scattering * self.density
+    }
+    /// `sigma_t = (sigma_s + sigma_a) * density`.
+    pub fn sigma_t(&self) -> Vec3 {
+        (self.scattering + self.absorption) * self.density
+    }
+    /// True when nothing scatters: the scattering passes have nothing to compute.
+    pub fn is_clear(&self) -> bool {
+        self.sigma_s().max_element() <= 0.0
+    }
+
+    pub fn validate(&self) -> Result<(), ParamError> {
+        Self::SCATTERING.check_rgb(self.scattering)?;
+        Self::ABSORPTION.check_rgb(self.absorption)?;
+        Self::DENSITY.check(self.density as f64)?;
+        self.phase.validate()
+    }
+}
+
+impl Default for Medium {
+    fn default() -> Self {
+        Medium {
+            scattering: Vec3::splat(0.1),
+            absorption: Vec3::splat(0.01),
+            density: 1.0,
+            phase: Phase::default(),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Light
+// ---------------------------------------------------------------------------------------------
+
+/// The single light of a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Light {
+    /// A spherical light small enough to count as a point for visibility.
+    Point {
+        /// World position.
+        position: Vec3,
+        /// Radiant intensity per RGB channel.
+        intensity: Vec3,
+        /// Softening radius: `1/d^2` becomes `1/(d^2 + radius^2)`, which keeps a view ray through
+        /// the light finite. 0 is an ideal point.
+        radius: f32,
+    },
+    /// A light at infinity (the sun): parallel rays, no fall-off.
+    Directional {
+        /// Unit vector pointing *toward* the light (as in Mitsuba's `sunDirection`).
+        direction: Vec3,
+        /// Irradiance per RGB channel on a surface facing the light, outside the medium.
+        irradiance: Vec3,
+    },
+}
+
+impl Light {
+    pub const POSITION: Spec = Spec {
+        name: "position",
+        unit: "unit",
+        min: -1.0e7,
+        max: 1.0e7,
+        doc: "World position of the point light.",
+    };
+    pub const INTENSITY: Spec = Spec {
+        name: "intensity",
+        unit: "W/sr",
+        min: 0.0,
+        max: 1.0e9,
+        doc: "Radiant intensity of the point light per channel.",
+    };
+    pub const RADIUS: Spec = Spec {
+        name: "radius",
+        unit: "unit",
+        min: 0.0,
+        max: 1.0e4,
+        doc: "Radius that softens 1/d^2 near the point light; 0 is an ideal point.",
+    };
+    pub const DIRECTION: Spec = Spec {
+        name: "direction",
+        unit: "",
+        min: -1.0,
+        max: 1.0,
+        doc: "Unit vector toward the directional light (normalised on load).",
+    };
+    pub const IRRADIANCE: Spec = Spec {
+        name: "irradiance",
+        unit: "W/m^2",
+        min: 0.0,
+        max: 1.0e9,
+        doc: "Irradiance of the directional light per channel.",
+    };
+
+    pub fn is_point(&self) -> bool {
+        matches!(self, Light::Point { .. })
+    }
+
+    /// Radiant intensity or irradiance.
+    pub fn power(&self) -> Vec3 {
+        match *self {
+            Light::Point { intensity, .. } => intensity,
+            Light::Directional { irradiance, .. } => irradiance,
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), ParamError> {
+        match *self {
+            Light::Point { position, intensity, radius } => {
+                Self::POSITION.check_rgb(position)?;
+                Self::INTENSITY.check_rgb(intensity)?;
+                Self::RADIUS.check(radius as f64)
+            }
+            Light::Directional { direction, irradiance } => {
+                Self::IRRADIANCE.check_rgb(irradiance)?;
+                if !direction.is_finite() || direction.length() < 1e-6 {
+                    return Err(ParamError::Invalid(format!(
+                        "light direction {direction} must be a finite, non-zero vector"
+                    )));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The same light with its direction normalised (directional) — loaders call this.
+    pub fn normalized(self) -> Self {
+        match self {
+            Light::Directional { direction, irradiance } => {
+                Light::Directional { direction: direction.normalize_or(Vec3::Y), irradiance }
+            }
+            l => l,
+        }
+    }
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light::Point { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(20.0), radius: 0.0 }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Grid
+// ---------------------------------------------------------------------------------------------
+
+/// How the z bins (light rays within a plane) are spaced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum BinSpacing {
+    /// Equal steps of the angle `psi` at the light: for a clear medium every bin carries the same
+    /// in-scattering weight (DESIGN section 2).
+    #[default]
+    UniformAngle,
+    /// Equal steps of `cos(psi)`, the paper's choice.
+    UniformCosine,
+}
+
+/// Resolution of the epipolar voxel grid: `planes x rays x bins` bits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Grid {
+    /// Epipolar planes (x): half-lines around the epipole.
+    pub planes: u32,
+    /// View rays per plane (y), ordered by the angle `gamma` from the eye-light axis.
+    pub rays: u32,
+    /// Light rays per plane (z), as bits: a multiple of 32.
+    pub bins: u32,
+    /// Spacing of the bins for point lights (directional lights are always uniform in distance).
+    pub spacing: BinSpacing,
+}
+
+impl Grid {
+    pub const PLANES: Spec =
+        Spec { name: "planes", unit: "", min: 8.0, max: 8192.0, doc: "Epipolar planes (x)." };
+    pub const RAYS: Spec =
+        Spec { name: "rays", unit: "", min: 8.0, max: 8192.0, doc: "View rays per plane (y)." };
+    pub const BINS: Spec = Spec {
+        name: "bins",
+        unit: "bits",
+        min: 32.0,
+        max: 2048.0,
+        doc: "Light rays per plane (z): depth resolution of the shadow volume, a multiple of 32.",
+    };
+
+    /// 32-bit words per ray.
+    pub fn words(&self) -> u32 {
+        self.bins / 32
+    }
+
+    /// Bytes of one grid buffer.
+    pub fn bytes(&self) -> u64 {
+        self.planes as u64 * self.rays as u64 * self.words() as u64 * 4
+    }
+
+    pub fn validate(&self) -> Result<(), ParamError> {
+        Self::PLANES.check(self.planes as f64)?;
+        Self::RAYS.check(self.rays as f64)?;
+        Self::BINS.check(self.bins as f64)?;
+        if self.bins % 32 != 0 {
+            return Err(ParamError::Invalid(format!(
+                "bins = {} must be a multiple of 32",
+                self.bins
+            )));
+        }
+        Ok(())
+    }
+
+    /// Parses `PxRxB`, e.g. `1024x1024x256`.
+    pub fn parse(text: &str) -> Result<Grid, ParamError> {
+        let parts: Vec<&str> = text.split(['x', 'X']).collect();
+        let bad = || ParamError::Invalid(format!("grid '{text}' is not PLANESxRAYSxBINS, e.g. 1024x1024x256"));
+        if parts.len() != 3 {
+            return Err(bad());
+        }
+        let n: Vec<u32> =
+            parts.iter().map(|p| p.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+        let g = Grid { planes: n[0], rays: n[1], bins: n[2], ..Grid::default() };
+        g.validate()?;
+        Ok(g)
+    }
+}
+
+impl std::fmt::Display for Grid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}x{}", self.planes, self.rays, self.bins)
+    }
+}
+
+impl Default for Grid {
+    fn default() -> Self {
+        Grid { planes: 1024, rays: 1024, bins: 256, spacing: BinSpacing::UniformAngle }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Image / tone mapping
+// ---------------------------------------------------------------------------------------------
+
+/// How the linear image becomes a PNG.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Exposure {
+    /// Exposure in stops applied before tone mapping.
+    pub stops: f32,
+}
+
+impl Exposure {
+    pub const STOPS: Spec =
+        Spec { name: "exposure", unit: "EV", min: -20.0, max: 20.0, doc: "Exposure before tone mapping." };
+}
+
+impl Default for Exposure {
+    fn default() -> Self {
+        Exposure { stops: 0.0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Integrates a phase function over the sphere with a midpoint rule in cos(theta).
+    fn sphere_integral(p: &Phase) -> f64 {
+        let n = 200_000;
+        (0..n)
+            .map(|i| {
+                let c = -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
+                p.eval(c) * 2.0 * PI * 2.0 / n as f64
+            })
+            .sum()
+    }
+
+    #[test]
+    fn phase_functions_are_normalised() {
+        for p in [
+            Phase::Isotropic,
+            Phase::Rayleigh,
+            Phase::HenyeyGreenstein { g: 0.7 },
+            Phase::HenyeyGreenstein { g: -0.5 },
+            Phase::Schlick { g: 0.8 },
+            Phase::CornetteShanks { g: 0.6 },
+            Phase::CornetteShanks { g: -0.3 },
+        ] {
+            let i = sphere_integral(&p);
+            assert!((i - 1.0).abs() < 1e-4, "{p:?} integrates to {i}");
+        }
+    }
+
+    #[test]
+    fn grid_parse_and_validate() {
+        let g = Grid::parse("512x256x64").unwrap();
+        assert_eq!((g.planes, g.rays, g.bins), (512, 256, 64));
+        assert!(Grid::parse("512x256x60").is_err());
+        assert!(Grid::parse("512x256").is_err());
+        assert!(Grid::parse("axbxc").is_err());
+        assert!(Grid::parse("4x256x64").is_err());
+    }
+
+    #[test]
+    fn ranges_reject_bad_values() {
+        assert!(Medium::SCATTERING.check(-1.0).is_err());
+        assert!(Medium::SCATTERING.check(f64::NAN).is_err());
+        assert!(Medium::default().validate().is_ok());
+        let m = Medium { phase: Phase::HenyeyGreenstein { g: 1.5 }, ..Medium::default() };
+        assert!(m.validate().is_err());
+    }
+}

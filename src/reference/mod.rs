@@ -1,0 +1,1 @@
+//! Reference renderer. STUB

@@ -1,0 +1,251 @@
+//! Scenes: triangle meshes in world space, a camera, one light, a medium and grid settings.
+//!
+//! Every loader produces the same [`Scene`]; the GPU pipeline and the reference renderer both read it
+//! and nothing else. Meshes are flattened to world space at load time (node transforms applied), so
+//! the renderers never see a hierarchy.
+
+use crate::params::{Grid, Light, Medium, ParamError};
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+mod builtin;
+mod load;
+
+pub use builtin::builtin_scene;
+pub use load::{load_scene, SceneError};
+
+/// Axis-aligned bounding box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// Radius of the bounding sphere around [`Aabb::center`].
+    pub fn radius(&self) -> f32 {
+        self.extent().length() * 0.5
+    }
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+/// A triangle mesh in world space with one diffuse colour.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Triangles as indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+    /// Diffuse reflectance (linear RGB, 0..1).
+    pub albedo: Vec3,
+}
+
+impl Mesh {
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for &p in &self.positions {
+            b.grow(p);
+        }
+        b
+    }
+
+    /// Applies an affine transform to every vertex.
+    pub fn transform(&mut self, m: Mat4) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+    }
+}
+
+/// A pinhole camera. `fov_y_deg` is the vertical field of view.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    #[serde(default = "default_up")]
+    pub up: Vec3,
+    /// Vertical field of view in degrees, (0, 180).
+    pub fov_y_deg: f32,
+    /// Near clipping distance (> 0).
+    #[serde(default = "default_near")]
+    pub near: f32,
+    /// Far clipping distance (> near).
+    #[serde(default = "default_far")]
+    pub far: f32,
+}
+
+fn default_up() -> Vec3 {
+    Vec3::Y
+}
+fn default_near() -> f32 {
+    Camera::default().near
+}
+fn default_far() -> f32 {
+    Camera::default().far
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { eye: Vec3::new(0.0, 1.0, 5.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.01, far: 1000.0 }
+    }
+}
+
+impl Camera {
+    /// Rejects cameras that cannot form an image.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let bad = |why: &str| Err(ParamError::Invalid(format!("degenerate camera: {why}")));
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return bad("eye, target and up must be finite");
+        }
+        let fwd = self.target - self.eye;
+        if fwd.length() < 1e-12 * (1.0 + self.eye.length()) {
+            return bad("eye and target coincide");
+        }
+        if fwd.normalize().cross(self.up.normalize_or_zero()).length() < 1e-6 {
+            return bad("the up vector is parallel to the view direction");
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
+            return bad("the vertical field of view must lie in (0, 179) degrees");
+        }
+        if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
+            return bad("near must be > 0 and far > near");
+        }
+        Ok(())
+    }
+
+    pub fn view(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
+    }
+
+    /// Right-handed perspective with depth in [0, 1] (wgpu convention).
+    pub fn proj(&self, aspect: f32) -> Mat4 {
+        // wgpu's NDC is D3D's: y up, depth in [0, 1].
+        glam::camera::rh::proj::directx::perspective(self.fov_y_deg.to_radians(), aspect, self.near, self.far)
+    }
+
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        self.proj(aspect) * self.view()
+    }
+
+    /// Orthonormal camera basis (right, up, forward) in world space, in f64.
+    pub fn basis_f64(&self) -> [[f64; 3]; 3] {
+        let e = self.eye.as_dvec3();
+        let f = (self.target.as_dvec3() - e).normalize();
+        let r = f.cross(self.up.as_dvec3()).normalize();
+        let u = r.cross(f);
+        [r.to_array(), u.to_array(), f.to_array()]
+    }
+
+    /// World-space unit direction of the ray through the centre of pixel `(px, py)` of a
+    /// `width x height` image (row 0 at the top). This is *the* pixel convention: the shaders and
+    /// the reference renderer use the same formula.
+    pub fn pixel_dir_f64(&self, px: f64, py: f64, width: u32, height: u32) -> glam::DVec3 {
+        let [r, u, f] = self.basis_f64();
+        let (r, u, f) = (glam::DVec3::from(r), glam::DVec3::from(u), glam::DVec3::from(f));
+        let tan_half = (self.fov_y_deg as f64).to_radians() * 0.5;
+        let tan_half = tan_half.tan();
+        let aspect = width as f64 / height as f64;
+        let ndc_x = (2.0 * (px + 0.5) / width as f64 - 1.0) * tan_half * aspect;
+        let ndc_y = (1.0 - 2.0 * (py + 0.5) / height as f64) * tan_half;
+        (f + r * ndc_x + u * ndc_y).normalize()
+    }
+
+    /// A camera that frames `bounds` from a pleasant three-quarter view.
+    pub fn framing(bounds: &Aabb) -> Camera {
+        let c = bounds.center();
+        let r = bounds.radius().max(1e-3);
+        let fov = 45.0f32;
+        let dist = r / (fov.to_radians() * 0.5).sin() * 1.05;
+        let dir = Vec3::new(0.35, 0.3, 1.0).normalize();
+        Camera { eye: c + dir * dist, target: c, up: Vec3::Y, fov_y_deg: fov, near: dist * 1e-3, far: dist + 4.0 * r }
+    }
+}
+
+/// Everything one frame needs besides the image size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// Human-readable name (file stem or "built-in").
+    pub name: String,
+    /// Where it came from, for messages; `None` for the built-in scene.
+    pub source: Option<PathBuf>,
+    pub meshes: Vec<Mesh>,
+    pub camera: Camera,
+    pub light: Light,
+    pub medium: Medium,
+    pub grid: Grid,
+}
+
+impl Scene {
+    pub fn bounds(&self) -> Aabb {
+        self.meshes.iter().fold(Aabb::EMPTY, |b, m| b.union(&m.bounds()))
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// The box the medium fills for a directional light: the scene's bounds grown by 1% so that
+    /// surfaces on the boundary are inside. (A point light's medium is unbounded; see DESIGN 1.)
+    pub fn medium_bounds(&self) -> Aabb {
+        let b = self.bounds();
+        let pad = b.extent().max_element() * 0.01 + 1e-6;
+        Aabb { min: b.min - Vec3::splat(pad), max: b.max + Vec3::splat(pad) }
+    }
+
+    /// All triangles as world-space vertex triples, with the index of their mesh.
+    pub fn world_triangles(&self) -> impl Iterator<Item = ([Vec3; 3], usize)> + '_ {
+        self.meshes.iter().enumerate().flat_map(|(mi, m)| {
+            m.triangles.iter().map(move |t| {
+                ([m.positions[t[0] as usize], m.positions[t[1] as usize], m.positions[t[2] as usize]], mi)
+            })
+        })
+    }
+
+    /// Checks everything a renderer relies on; loaders call it before returning.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if self.triangle_count() == 0 {
+            return Err(ParamError::Invalid("the scene has no triangles".into()));
+        }
+        for m in &self.meshes {
+            if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
+                return Err(ParamError::Invalid(format!(
+                    "mesh '{}' has a non-finite vertex (index {i}: {})",
+                    m.name, m.positions[i]
+                )));
+            }
+            let n = m.positions.len() as u32;
+            if let Some(t) = m.triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
+                return Err(ParamError::Invalid(format!(
+                    "mesh '{}' has a triangle {t:?} indexing past its {n} vertices",
+                    m.name
+                )));
+            }
+        }
+        self.camera.validate()?;
+        self.light.validate()?;
+        self.medium.validate()?;
+        self.grid.validate()
+    }
+}
