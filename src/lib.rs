@@ -24,6 +24,7 @@ pub mod gpu;
 pub mod image;
 pub mod metrics;
 pub mod params;
+pub mod preset;
 pub mod reference;
 pub mod render;
 pub mod scene;

@@ -1,1 +1,202 @@
-//! GPU context. STUB
+//! The GPU side's plumbing: device creation (headless, or handed over by the editor), the shader
+//! library, and encoder timestamps.
+
+mod shaders;
+mod timing;
+
+pub use shaders::{ShaderError, ShaderLibrary, ShaderSource};
+pub use timing::{GpuTimer, PassTiming};
+
+use std::sync::Arc;
+
+/// Errors of the GPU path. Every message says what to do or what was wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found (wgpu saw none). On Debian install the software Vulkan driver with \
+         `apt-get install mesa-vulkan-drivers libvulkan1`, or run on a machine with a GPU"
+    )]
+    NoAdapter,
+    #[error("could not open the GPU device on '{adapter}': {message}")]
+    Device { adapter: String, message: String },
+    #[error("{what} needs {needed} but the adapter '{adapter}' allows at most {limit}{hint}")]
+    TooLarge { what: String, needed: u64, limit: u64, adapter: String, hint: String },
+    #[error(transparent)]
+    Shader(#[from] ShaderError),
+    #[error("GPU validation error while {during}: {message}")]
+    Validation { during: String, message: String },
+    #[error(transparent)]
+    Frame(#[from] crate::render::FrameError),
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+}
+
+/// An adapter, device and queue, plus what we learned about them.
+#[derive(Clone)]
+pub struct GpuContext {
+    pub adapter: Arc<wgpu::Adapter>,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Encoder-level timestamps are available (see [`GpuTimer`]).
+    pub timestamps: bool,
+}
+
+impl GpuContext {
+    /// Features we use when present.
+    pub const OPTIONAL_FEATURES: wgpu::Features =
+        wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+
+    /// Opens the best adapter without a window (Vulkan first; the software driver counts).
+    pub fn headless() -> Result<GpuContext, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY),
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            ..Default::default()
+        }))
+        .map_err(|_| GpuError::NoAdapter)?;
+        Self::from_adapter(adapter)
+    }
+
+    /// Opens a device on `adapter` with the adapter's own limits (large grids need them).
+    pub fn from_adapter(adapter: wgpu::Adapter) -> Result<GpuContext, GpuError> {
+        let info = adapter.get_info();
+        let features = adapter.features() & Self::OPTIONAL_FEATURES;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("epivox::device"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device { adapter: info.name.clone(), message: e.to_string() })?;
+        Ok(GpuContext {
+            adapter: Arc::new(adapter),
+            device,
+            queue,
+            timestamps: features.contains(Self::OPTIONAL_FEATURES),
+            info,
+        })
+    }
+
+    /// Adapter name and backend, for reports.
+    pub fn adapter_name(&self) -> String {
+        format!("{} ({:?}, {})", self.info.name, self.info.backend, self.info.driver_info)
+    }
+
+    /// Checks a buffer size against the device's limits.
+    pub fn check_buffer(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        let l = self.device.limits();
+        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        if bytes > limit {
+            return Err(GpuError::TooLarge {
+                what: what.to_string(),
+                needed: bytes,
+                limit,
+                adapter: self.info.name.clone(),
+                hint: " bytes; use fewer planes, rays or bins (--grid)".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks a 2-D texture size against the device's limits.
+    pub fn check_texture(&self, what: &str, width: u32, height: u32) -> Result<(), GpuError> {
+        let limit = self.device.limits().max_texture_dimension_2d;
+        let needed = width.max(height);
+        if needed > limit {
+            return Err(GpuError::TooLarge {
+                what: what.to_string(),
+                needed: needed as u64,
+                limit: limit as u64,
+                adapter: self.info.name.clone(),
+                hint: " texels per side".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Waits for all submitted work.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// Copies a buffer back to the CPU (blocking).
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("GpuContext::read_buffer::staging"),
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("GpuContext::read_buffer") });
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        self.queue.submit([enc.finish()]);
+        self.map_read(&staging)
+    }
+
+    /// Maps a MAP_READ buffer and returns its bytes.
+    pub fn map_read(&self, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+
+    /// Reads an RGBA32Float texture back as `width * height * 4` floats.
+    pub fn read_texture_rgba32f(&self, texture: &wgpu::Texture) -> Result<Vec<f32>, GpuError> {
+        let (w, h) = (texture.width(), texture.height());
+        let row = (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("GpuContext::read_texture::staging"),
+            size: row as u64 * h as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("GpuContext::read_texture") });
+        enc.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(h) },
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        self.queue.submit([enc.finish()]);
+        let bytes = self.map_read(&staging)?;
+        let mut out = Vec::with_capacity((w * h * 4) as usize);
+        for y in 0..h as usize {
+            let start = y * row as usize;
+            out.extend_from_slice(bytemuck::cast_slice(&bytes[start..start + w as usize * 16]));
+        }
+        Ok(out)
+    }
+
+    /// Runs `f` inside a validation error scope and reports what it caught.
+    pub fn scoped<T>(&self, during: &str, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        match pollster::block_on(scope.pop()) {
+            None => Ok(value),
+            Some(e) => Err(GpuError::Validation { during: during.to_string(), message: e.to_string() }),
+        }
+    }
+}

@@ -1,1 +1,383 @@
-//! Renderer. STUB
+//! The GPU renderer: one struct per pass, and [`Renderer::render`], the ordered list of pass calls.
+//!
+//! ```text
+//! ShadowMap -> Surface -> Voxelize -> Scan -> ScatterTable (point light) -> Integrate -> Composite
+//! ```
+
+mod composite;
+mod frame;
+mod integrate;
+mod scan;
+mod scatter_table;
+mod scene_gpu;
+mod shadow_map;
+mod surface;
+mod util;
+mod voxelize;
+
+pub use composite::Composite;
+pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
+pub use integrate::Integrate;
+pub use scan::Scan;
+pub use scatter_table::ScatterTable;
+pub use scene_gpu::SceneGpu;
+pub use shadow_map::{FaceUniforms, ShadowMap, ShadowUniforms};
+pub use surface::Surface;
+pub use voxelize::Voxelize;
+
+use crate::gpu::{GpuContext, GpuError, GpuTimer, PassTiming, ShaderLibrary};
+use crate::image::Image;
+use crate::params::Grid;
+use crate::scene::Scene;
+use util::texture_2d;
+use wgpu::util::DeviceExt;
+
+/// What one frame produced.
+#[derive(Debug, Clone)]
+pub struct RenderOutput {
+    /// Final linear radiance.
+    pub hdr: Image,
+    /// In-scattered radiance alone.
+    pub scatter: Image,
+    /// GPU time per pass (empty when the adapter has no encoder timestamps).
+    pub timings: Vec<PassTiming>,
+    /// The frame's fitted grid ranges.
+    pub setup: FrameSetup,
+}
+
+impl RenderOutput {
+    pub fn total_ms(&self) -> f64 {
+        self.timings.iter().map(|t| t.ms).sum()
+    }
+}
+
+/// Size-dependent targets.
+struct Targets {
+    width: u32,
+    height: u32,
+    radiance: wgpu::TextureView,
+    distance: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    scatter: wgpu::Texture,
+    scatter_view: wgpu::TextureView,
+    hdr: wgpu::Texture,
+    hdr_view: wgpu::TextureView,
+}
+
+/// Grid-dependent resources.
+struct GridResources {
+    grid: Grid,
+    bits: wgpu::Buffer,
+    dummy: wgpu::TextureView,
+}
+
+/// Owns the passes and the resources of the current scene, size and grid.
+pub struct Renderer {
+    pub ctx: GpuContext,
+    shadow_map: ShadowMap,
+    surface: Surface,
+    voxelize: Voxelize,
+    scan: Scan,
+    scatter_table: ScatterTable,
+    integrate: Integrate,
+    composite: Composite,
+    frame_buffer: wgpu::Buffer,
+    shadow_uniforms: wgpu::Buffer,
+    table: wgpu::Buffer,
+    timer: Option<GpuTimer>,
+    geometry: Option<(SceneGpu, usize)>,
+    targets: Option<Targets>,
+    grid: Option<GridResources>,
+}
+
+impl Renderer {
+    /// Shadow-map texels per side.
+    pub const SHADOW_MAP_SIZE: u32 = 2048;
+
+    pub fn new(ctx: GpuContext, lib: &ShaderLibrary) -> Result<Renderer, GpuError> {
+        let d = &ctx.device;
+        let (shadow_map, surface, voxelize, scan, scatter_table, integrate, composite) = ctx.scoped("creating the pipelines", || -> Result<_, GpuError> {
+            Ok((
+                ShadowMap::new(d, lib, Self::SHADOW_MAP_SIZE.min(d.limits().max_texture_dimension_2d))?,
+                Surface::new(d, lib)?,
+                Voxelize::new(d, lib)?,
+                Scan::new(d, lib)?,
+                ScatterTable::new(d, lib)?,
+                Integrate::new(d, lib)?,
+                Composite::new(d, lib)?,
+            ))
+        })??;
+        let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Renderer::frame_uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let shadow_uniforms = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Renderer::shadow_uniforms"),
+            size: std::mem::size_of::<ShadowUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let table = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Renderer::scatter_table"),
+            size: ScatterTable::BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let timer = GpuTimer::new(&ctx);
+        Ok(Renderer {
+            ctx,
+            shadow_map,
+            surface,
+            voxelize,
+            scan,
+            scatter_table,
+            integrate,
+            composite,
+            frame_buffer,
+            shadow_uniforms,
+            table,
+            timer,
+            geometry: None,
+            targets: None,
+            grid: None,
+        })
+    }
+
+    /// Uploads the scene's geometry (call again when the geometry changes).
+    pub fn set_scene(&mut self, scene: &Scene) {
+        self.geometry = Some((SceneGpu::new(&self.ctx.device, scene), scene.triangle_count()));
+    }
+
+    fn ensure_targets(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
+        if self.targets.as_ref().is_some_and(|t| t.width == width && t.height == height) {
+            return Ok(());
+        }
+        self.ctx.check_texture("the image", width, height)?;
+        let d = &self.ctx.device;
+        use wgpu::TextureUsages as U;
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let radiance = texture_2d(d, "Renderer::surface_radiance", width, height, 1, Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let distance = texture_2d(d, "Renderer::surface_distance", width, height, 1, Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let depth = texture_2d(d, "Renderer::depth", width, height, 1, Surface::DEPTH, U::RENDER_ATTACHMENT);
+        let scatter = texture_2d(d, "Renderer::scatter", width, height, 1, Integrate::OUTPUT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC);
+        let hdr = texture_2d(d, "Renderer::hdr", width, height, 1, Composite::OUTPUT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC);
+        self.targets = Some(Targets {
+            width,
+            height,
+            radiance: view(&radiance),
+            distance: view(&distance),
+            depth: view(&depth),
+            scatter_view: view(&scatter),
+            scatter,
+            hdr_view: view(&hdr),
+            hdr,
+        });
+        Ok(())
+    }
+
+    fn ensure_grid(&mut self, grid: Grid) -> Result<(), GpuError> {
+        if self.grid.as_ref().is_some_and(|g| g.grid == grid) {
+            return Ok(());
+        }
+        self.ctx.check_buffer(&format!("the {grid} grid"), grid.bytes())?;
+        self.ctx.check_texture(&format!("the {grid} grid's planes x rays"), grid.planes, grid.rays)?;
+        let d = &self.ctx.device;
+        let bits = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Renderer::grid_bits"),
+            size: grid.bytes(),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let dummy = Voxelize::dummy_target(d, grid.planes, grid.rays).create_view(&Default::default());
+        self.grid = Some(GridResources { grid, bits, dummy });
+        Ok(())
+    }
+
+    /// Renders one frame of `scene` at `width x height` with Voxelized Epipolar Shadow Volumes.
+    pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
+        if self.geometry.as_ref().is_none_or(|(_, n)| *n != scene.triangle_count()) {
+            self.set_scene(scene);
+        }
+        self.ensure_targets(width, height)?;
+        self.ensure_grid(scene.grid)?;
+        let setup = FrameSetup::new(scene, width, height, method)?;
+        let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
+            unreachable!("ensured above")
+        };
+        let ctx = &self.ctx;
+        let d = &ctx.device;
+        ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
+        let (_, shadow_lookup, _) = self.shadow_map.uniforms(scene);
+        ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
+
+        let bind = |label: &str, layout: &wgpu::BindGroupLayout, resources: &[wgpu::BindingResource]| {
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries: &resources
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
+                    .collect::<Vec<_>>(),
+            })
+        };
+        use wgpu::BindingResource as R;
+        let frame = self.frame_buffer.as_entire_binding();
+        let surface_bg = bind(
+            "Surface::bind_group",
+            &self.surface.layout,
+            &[frame.clone(), self.shadow_uniforms.as_entire_binding(), R::TextureView(&self.shadow_map.map_view)],
+        );
+        let voxelize_bg = bind(
+            "Voxelize::bind_group",
+            &self.voxelize.layout,
+            &[frame.clone(), geometry.triangles.as_entire_binding(), g.bits.as_entire_binding()],
+        );
+        let scan_bg = bind("Scan::bind_group", &self.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
+        let table_bg =
+            bind("ScatterTable::bind_group", &self.scatter_table.layout, &[frame.clone(), self.table.as_entire_binding()]);
+        let integrate_bg = bind(
+            "Integrate::bind_group",
+            &self.integrate.layout,
+            &[
+                frame.clone(),
+                g.bits.as_entire_binding(),
+                self.table.as_entire_binding(),
+                R::TextureView(&t.distance),
+                R::TextureView(&t.scatter_view),
+            ],
+        );
+        let composite_bg = bind(
+            "Composite::bind_group",
+            &self.composite.layout,
+            &[
+                frame,
+                R::TextureView(&t.radiance),
+                R::TextureView(&t.distance),
+                R::TextureView(&t.scatter_view),
+                R::TextureView(&t.hdr_view),
+            ],
+        );
+
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Renderer::frame") });
+        let mut timer = self.timer.take();
+        if let Some(tm) = timer.as_mut() {
+            tm.begin(&mut enc);
+        }
+        let mut mark = |enc: &mut wgpu::CommandEncoder, pass: &'static str| {
+            if let Some(tm) = timer.as_mut() {
+                tm.mark(enc, pass);
+            }
+        };
+        // The frame: an ordered list of passes.
+        self.shadow_map.record(&ctx.queue, &mut enc, scene, geometry);
+        mark(&mut enc, "shadow_map");
+        self.surface.record(&mut enc, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
+        mark(&mut enc, "surface");
+        enc.clear_buffer(&g.bits, 0, None);
+        self.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, geometry.triangle_count);
+        mark(&mut enc, "voxelize");
+        self.scan.record(&mut enc, &scan_bg, &scene.grid);
+        mark(&mut enc, "scan");
+        if scene.light.is_point() && method == Method::Vsv {
+            self.scatter_table.record(&mut enc, &table_bg);
+            mark(&mut enc, "scatter_table");
+        }
+        self.integrate.record(&mut enc, &integrate_bg, width, height);
+        mark(&mut enc, "integrate");
+        self.composite.record(&mut enc, &composite_bg, width, height);
+        mark(&mut enc, "composite");
+        if let Some(tm) = timer.as_ref() {
+            tm.resolve(&mut enc);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let timings = match timer.as_ref() {
+            Some(tm) => tm.read(ctx)?,
+            None => Vec::new(),
+        };
+        self.timer = timer;
+
+        let to_image = |data: Vec<f32>| {
+            let mut img = Image::new(width, height);
+            for (p, c) in img.pixels.iter_mut().zip(data.chunks_exact(4)) {
+                *p = [c[0], c[1], c[2]];
+            }
+            img
+        };
+        let hdr = to_image(ctx.read_texture_rgba32f(&t.hdr)?);
+        let scatter = to_image(ctx.read_texture_rgba32f(&t.scatter)?);
+        Ok(RenderOutput { hdr, scatter, timings, setup })
+    }
+
+    /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the
+    /// inspector and tests.
+    pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
+        let g = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
+        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(&g.bits)?).to_vec())
+    }
+
+    /// Uploads raw grid words (tests use it to check the scan in isolation).
+    pub fn debug_upload_buffer(&self, data: &[u32]) -> wgpu::Buffer {
+        self.ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("Renderer::debug_upload"),
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        })
+    }
+}
+
+#[cfg(test)]
+mod layout_tests {
+    //! The Rust mirrors of the WGSL uniform structs must match byte for byte: naga computes the
+    //! WGSL layout, `offset_of!` the Rust one.
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    fn wgsl_struct(file: &str, name: &str) -> (Vec<(String, u32)>, u32) {
+        let (module, _) = ShaderLibrary::embedded().validate(file).unwrap_or_else(|e| panic!("{e}"));
+        for (_, ty) in module.types.iter() {
+            if ty.name.as_deref() == Some(name) {
+                if let naga::TypeInner::Struct { members, span } = &ty.inner {
+                    return (members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect(), *span);
+                }
+            }
+        }
+        panic!("struct {name} not found in {file}");
+    }
+
+    fn check(file: &str, name: &str, rust: &[(&str, usize)], size: usize) {
+        let (members, span) = wgsl_struct(file, name);
+        let wgsl: Vec<(String, u32)> = members;
+        let rust: Vec<(String, u32)> = rust.iter().map(|(n, o)| (n.to_string(), *o as u32)).collect();
+        assert_eq!(wgsl, rust, "{name}: WGSL members (left) differ from Rust (right)");
+        assert_eq!(span as usize, size, "{name}: WGSL size {span} != Rust size {size}");
+    }
+
+    macro_rules! fields {
+        ($t:ty: $($f:ident),*) => { &[$((stringify!($f), offset_of!($t, $f))),*] };
+    }
+
+    #[test]
+    fn frame_uniforms_match_wgsl() {
+        check(
+            "scan.wgsl",
+            "Frame",
+            fields!(FrameUniforms: cam_right, cam_up, cam_fwd, eye, view_proj, light, light_power, axis, b1, b2,
+                sigma_s, sigma_t, ranges, medium_min, medium_max, grid, image, table),
+            size_of::<FrameUniforms>(),
+        );
+    }
+
+    #[test]
+    fn shadow_uniforms_match_wgsl() {
+        check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());
+        check(
+            "surface.wgsl",
+            "ShadowFaces",
+            fields!(ShadowUniforms: view_proj, params, origin),
+            size_of::<ShadowUniforms>(),
+        );
+    }
+}

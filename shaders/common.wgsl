@@ -1,0 +1,223 @@
+// common.wgsl: the per-frame uniforms and the mathematics every pass shares.
+//
+// Mirrors `src/render/frame.rs` (FrameUniforms) and `src/epipolar.rs`: the epipolar frame of the eye
+// and the light (axis `a`, basis b1/b2 around it), the fitted grid ranges, the pixel convention and
+// the phase functions. A layout test checks this struct against the Rust one.
+
+const PI: f32 = 3.14159265358979;
+const TAU: f32 = 6.28318530717959;
+const INV_4PI: f32 = 0.0795774715459477;
+
+// flags
+const FLAG_POINT: u32 = 1u;        // point light (else directional)
+const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
+const FLAG_COSINE_BINS: u32 = 4u;  // bins uniform in cos(psi) (else uniform in psi / r)
+const FLAG_CARTESIAN: u32 = 8u;    // screen-space Cartesian grid (the paper's section 2)
+
+struct Frame {
+    // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.
+    cam_right: vec4f,
+    cam_up: vec4f,
+    cam_fwd: vec4f,
+    // Eye position; w = far.
+    eye: vec4f,
+    view_proj: mat4x4f,
+    // Point light: position, w = 1. Directional: unit vector toward the light, w = 0.
+    light: vec4f,
+    // Intensity (W/sr) or irradiance (W/m^2); w = softening radius.
+    light_power: vec4f,
+    // Unit axis from the eye toward the light; w = eye-light distance D (point light).
+    axis: vec4f,
+    // Basis around the axis; w = first plane angle phi0 / angular span of the planes.
+    b1: vec4f,
+    b2: vec4f,
+    // sigma_s (rgb), w = phase asymmetry g.
+    sigma_s: vec4f,
+    // sigma_t (rgb), w = unused.
+    sigma_t: vec4f,
+    // gamma_lo, gamma_hi, z_lo, z_hi: the fitted ray and bin ranges.
+    ranges: vec4f,
+    // The box the medium fills for a directional light.
+    medium_min: vec4f,
+    medium_max: vec4f,
+    // planes, rays, bins, words per ray.
+    grid: vec4u,
+    // image width, height, phase id, flags.
+    image: vec4u,
+    // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); unused.
+    table: vec4u,
+}
+
+fn is_point_light(f: Frame) -> bool { return (f.image.w & FLAG_POINT) != 0u; }
+
+// ---- pixels --------------------------------------------------------------------------------
+
+// World direction of the ray through the centre of pixel `p` (row 0 at the top): the same formula
+// as `Camera::pixel_dir_f64`.
+fn pixel_dir(f: Frame, p: vec2f) -> vec3f {
+    let size = vec2f(f32(f.image.x), f32(f.image.y));
+    let ndc_x = (2.0 * (p.x + 0.5) / size.x - 1.0) * f.cam_right.w;
+    let ndc_y = (1.0 - 2.0 * (p.y + 0.5) / size.y) * f.cam_up.w;
+    return normalize(f.cam_fwd.xyz + f.cam_right.xyz * ndc_x + f.cam_up.xyz * ndc_y);
+}
+
+// ---- epipolar coordinates (src/epipolar.rs) ------------------------------------------------
+
+fn angle_between(a: vec3f, b: vec3f) -> f32 {
+    return atan2(length(cross(a, b)), dot(a, b));
+}
+
+fn phi_of_dir(f: Frame, v: vec3f) -> f32 {
+    var p = atan2(dot(v, f.b2.xyz), dot(v, f.b1.xyz));
+    if (p < 0.0) { p += TAU; }
+    return p;
+}
+
+fn dir_of(f: Frame, phi: f32, gamma: f32) -> vec3f {
+    let n = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
+    return f.axis.xyz * cos(gamma) + n * sin(gamma);
+}
+
+// Continuous plane coordinate in [0, planes) (plane i covers [i, i+1)).
+fn plane_coord(f: Frame, phi: f32) -> f32 {
+    var u = phi - f.b1.w;
+    u = u - floor(u / TAU) * TAU;
+    return u / f.b2.w * f32(f.grid.x);
+}
+
+fn phi_of_plane(f: Frame, x: f32) -> f32 {
+    return f.b1.w + x / f32(f.grid.x) * f.b2.w;
+}
+
+fn ray_coord(f: Frame, gamma: f32) -> f32 {
+    return (gamma - f.ranges.x) / (f.ranges.y - f.ranges.x) * f32(f.grid.y);
+}
+
+fn gamma_of_ray(f: Frame, y: f32) -> f32 {
+    return f.ranges.x + y / f32(f.grid.y) * (f.ranges.y - f.ranges.x);
+}
+
+// Continuous bin coordinate of z (psi or r).
+fn bin_coord(f: Frame, z: f32) -> f32 {
+    let b = f32(f.grid.z);
+    if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
+        return (cos(f.ranges.z) - cos(z)) / (cos(f.ranges.z) - cos(f.ranges.w)) * b;
+    }
+    return (z - f.ranges.z) / (f.ranges.w - f.ranges.z) * b;
+}
+
+fn z_of_bin(f: Frame, k: f32) -> f32 {
+    let s = k / f32(f.grid.z);
+    if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
+        let c0 = cos(f.ranges.z);
+        return acos(clamp(c0 - s * (c0 - cos(f.ranges.w)), -1.0, 1.0));
+    }
+    return f.ranges.z + s * (f.ranges.w - f.ranges.z);
+}
+
+// z (psi for a point light, r for a directional one) of the point at distance t along a view ray
+// that makes angle gamma with the axis.
+fn z_along(f: Frame, gamma: f32, t: f32) -> f32 {
+    if (is_point_light(f)) {
+        return atan2(t * sin(gamma), f.axis.w - t * cos(gamma));
+    }
+    return t * sin(gamma);
+}
+
+// ---- the grid's (plane, ray) axes, epipolar or Cartesian -----------------------------------
+
+fn is_cartesian(f: Frame) -> bool { return (f.image.w & FLAG_CARTESIAN) != 0u; }
+
+// Continuous (plane, ray) coordinates of a view direction. Cartesian (the paper's section 2): a
+// directional light along a screen axis; planes are the screen rows (or columns) and rays run
+// across them starting at the screen edge nearest the light, so the scan follows the light.
+fn grid_coords(f: Frame, v: vec3f) -> vec2f {
+    if (is_cartesian(f)) {
+        let z = dot(v, f.cam_fwd.xyz);
+        let sx = dot(v, f.cam_right.xyz) / z / f.cam_right.w;
+        let sy = dot(v, f.cam_up.xyz) / z / f.cam_up.w;
+        let p = f32(f.grid.x);
+        let r = f32(f.grid.y);
+        switch f.table.z {
+            case 0u: { return vec2f((1.0 - sy) * 0.5 * p, (1.0 - sx) * 0.5 * r); }
+            case 1u: { return vec2f((1.0 - sy) * 0.5 * p, (1.0 + sx) * 0.5 * r); }
+            case 2u: { return vec2f((1.0 + sx) * 0.5 * p, (1.0 - sy) * 0.5 * r); }
+            default: { return vec2f((1.0 + sx) * 0.5 * p, (1.0 + sy) * 0.5 * r); }
+        }
+    }
+    return vec2f(plane_coord(f, phi_of_dir(f, v)), ray_coord(f, angle_between(f.axis.xyz, v)));
+}
+
+// The view direction at continuous grid coordinates (x, y): the inverse of grid_coords.
+fn cell_dir(f: Frame, x: f32, y: f32) -> vec3f {
+    if (is_cartesian(f)) {
+        let u = x / f32(f.grid.x) * 2.0;
+        let w = y / f32(f.grid.y) * 2.0;
+        var sx = 0.0;
+        var sy = 0.0;
+        switch f.table.z {
+            case 0u: { sy = 1.0 - u; sx = 1.0 - w; }
+            case 1u: { sy = 1.0 - u; sx = w - 1.0; }
+            case 2u: { sx = u - 1.0; sy = 1.0 - w; }
+            default: { sx = u - 1.0; sy = w - 1.0; }
+        }
+        return normalize(f.cam_fwd.xyz + f.cam_right.xyz * (sx * f.cam_right.w) + f.cam_up.xyz * (sy * f.cam_up.w));
+    }
+    return dir_of(f, phi_of_plane(f, x), gamma_of_ray(f, y));
+}
+
+// ---- phase functions (src/params.rs, Phase::eval) ------------------------------------------
+
+fn phase(id: u32, g: f32, c: f32) -> f32 {
+    switch id {
+        case 1u: { // Henyey-Greenstein
+            let d = 1.0 + g * g - 2.0 * g * c;
+            return (1.0 - g * g) * INV_4PI / (d * sqrt(d));
+        }
+        case 2u: { // Schlick
+            let k = 1.55 * g - 0.55 * g * g * g;
+            let d = 1.0 - k * c;
+            return (1.0 - k * k) * INV_4PI / (d * d);
+        }
+        case 3u: { // Cornette-Shanks
+            let d = 1.0 + g * g - 2.0 * g * c;
+            return 3.0 * (1.0 - g * g) * (1.0 + c * c) / (8.0 * PI * (2.0 + g * g) * d * sqrt(d));
+        }
+        case 4u: { // Rayleigh
+            return 3.0 * (1.0 + c * c) / (16.0 * PI);
+        }
+        default: { return INV_4PI; }
+    }
+}
+
+// (1 - exp(-x)) / x, accurate for small x (the expm1 trap of DESIGN section 5).
+fn one_minus_exp_over_x(x: vec3f) -> vec3f {
+    let series = 1.0 - x * 0.5 + x * x / 6.0;
+    let direct = (1.0 - exp(-x)) / max(x, vec3f(1e-30));
+    return select(direct, series, abs(x) < vec3f(1e-3));
+}
+
+// A direction with no zero component, so slab tests never compute 0 * inf.
+fn safe_dir(d: vec3f) -> vec3f {
+    let s = select(vec3f(1.0), vec3f(-1.0), d < vec3f(0.0));
+    return select(d, s * 1e-20, abs(d) < vec3f(1e-20));
+}
+
+// Length of the segment from p in direction w (unit) inside the box [lo, hi]; p is inside.
+fn exit_distance(p: vec3f, w: vec3f, lo: vec3f, hi: vec3f) -> f32 {
+    let inv = 1.0 / safe_dir(w);
+    let t1 = (lo - p) * inv;
+    let t2 = (hi - p) * inv;
+    let tmax = max(t1, t2);
+    return max(0.0, min(tmax.x, min(tmax.y, tmax.z)));
+}
+
+// [t_in, t_out] of a ray against a box; t_in > t_out means a miss.
+fn box_span(o: vec3f, d: vec3f, lo: vec3f, hi: vec3f) -> vec2f {
+    let inv = 1.0 / safe_dir(d);
+    let t1 = (lo - o) * inv;
+    let t2 = (hi - o) * inv;
+    let tmin = min(t1, t2);
+    let tmax = max(t1, t2);
+    return vec2f(max(0.0, max(tmin.x, max(tmin.y, tmin.z))), min(tmax.x, min(tmax.y, tmax.z)));
+}

@@ -1,0 +1,55 @@
+// scatter_table.wgsl: the cumulative unshadowed in-scattering along view rays, for a point light.
+//
+// With dt / d^2 = dpsi / h (h = D sin gamma), the in-scattering of a lit stretch [psi_a, psi_b] of a
+// view ray at angle gamma is  sigma_s I0 / h * (G(gamma, psi_b) - G(gamma, psi_a)),  where
+//
+//   G(gamma, psi) = integral_0^psi p(cos(gamma + psi')) exp(-sigma_t (t + d)) h^2 / (h^2 + r^2 sin^2(gamma + psi')) dpsi'
+//   t + d = D (sin psi' + sin gamma) / sin(gamma + psi')
+//
+// (the last factor is the light's softening radius r: 1/d^2 -> 1/(d^2 + r^2)). The exponent is one
+// number, never a product of exponentials, so thick media neither overflow nor underflow early.
+// Row j holds gamma_j = gamma_lo + j / (rows - 1) * (gamma_hi - gamma_lo); column c holds
+// psi = c / cols * (pi - gamma_j). Each cell is integrated with 4-point Gauss-Legendre.
+
+#import common
+
+@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(1) var<storage, read_write> table: array<vec4f>;
+
+fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
+    let s = sin(gamma + psi);
+    let k = f.axis.w * (sin(psi) + sin(gamma)) / max(s, 1e-30);
+    let sigma_t = f.sigma_t.xyz;
+    let expo = select(sigma_t * k, vec3f(0.0), sigma_t == vec3f(0.0));
+    let r = f.light_power.w;
+    var soft = 1.0;
+    if (r > 0.0) { soft = h2 / (h2 + r * r * s * s); }
+    return phase(f.image.z, f.sigma_s.w, cos(gamma + psi)) * exp(-expo) * soft;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3u) {
+    let rows = f.table.x;
+    let cols = f.table.y;
+    let j = id.x;
+    if (j >= rows) { return; }
+    let gamma = f.ranges.x + f32(j) / f32(rows - 1u) * (f.ranges.y - f.ranges.x);
+    let h = f.axis.w * sin(gamma);
+    let h2 = h * h;
+    let width = (PI - gamma) / f32(cols);
+    // Gauss-Legendre nodes and weights on [0, 1].
+    let x = array<f32, 4>(0.0694318442, 0.3300094782, 0.6699905218, 0.9305681558);
+    let w = array<f32, 4>(0.1739274226, 0.3260725774, 0.3260725774, 0.1739274226);
+    var acc = vec3f(0.0);
+    let base = j * (cols + 1u);
+    table[base] = vec4f(0.0);
+    for (var c = 0u; c < cols; c++) {
+        let a = f32(c) * width;
+        var cell = vec3f(0.0);
+        for (var q = 0; q < 4; q++) {
+            cell += w[q] * integrand(gamma, a + x[q] * width, h2);
+        }
+        acc += cell * width;
+        table[base + c + 1u] = vec4f(acc, 0.0);
+    }
+}

@@ -1,0 +1,112 @@
+// surface.wgsl: direct lighting of the surfaces, before the medium's view-path attenuation.
+//
+//   L_surface = albedo / pi * |cos theta_i| * V_shadow_map * E_in
+//   point:        E_in = I0 * exp(-sigma_t d) / (d^2 + r^2)
+//   directional:  E_in = E0 * exp(-sigma_t l(P)),  l = path toward the light inside the medium box
+//
+// Also writes the distance t from the eye to the surface (negative for the sky): the integrate
+// pass ends each view ray there, and the composite pass attenuates L_surface by exp(-sigma_t t).
+
+#import common
+
+struct ShadowFaces {
+    view_proj: array<mat4x4f, 6>,
+    // x: texels per side, y: depth bias (scene units), z: 1 point / 0 directional.
+    params: vec4f,
+    // Directional: the reference point far on the light's side.
+    origin: vec4f,
+}
+
+@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(1) var<uniform> shadow: ShadowFaces;
+@group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
+
+struct VsOut {
+    @builtin(position) clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) albedo: vec3f,
+}
+
+struct FsOut {
+    @location(0) radiance: vec4f,
+    @location(1) distance: vec4f,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3f, @location(1) albedo: vec3f) -> VsOut {
+    var o: VsOut;
+    o.clip = f.view_proj * vec4f(position, 1.0);
+    o.world = position;
+    o.albedo = albedo;
+    return o;
+}
+
+// Cube face of a direction, in the order +x -x +y -y +z -z.
+fn cube_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) { return select(1u, 0u, d.x > 0.0); }
+    if (a.y >= a.z) { return select(3u, 2u, d.y > 0.0); }
+    return select(5u, 4u, d.z > 0.0);
+}
+
+// Fraction of a 2x2 texel neighbourhood that sees the light.
+fn visibility(p: vec3f, bias: f32) -> f32 {
+    var layer = 0u;
+    var value = 0.0;
+    if (shadow.params.z > 0.5) {
+        let d = p - f.light.xyz;
+        layer = cube_face(d);
+        value = length(d);
+    } else {
+        value = dot(shadow.origin.xyz - p, f.light.xyz);
+    }
+    let clip = shadow.view_proj[layer] * vec4f(p, 1.0);
+    if (clip.w <= 0.0) { return 1.0; }
+    let ndc = clip.xy / clip.w;
+    let n = shadow.params.x;
+    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * n - 0.5;
+    let base = floor(uv);
+    let fr = uv - base;
+    var lit = vec4f(0.0);
+    for (var k = 0; k < 4; k++) {
+        let o = vec2f(f32(k & 1), f32(k >> 1));
+        let c = vec2i(clamp(base + o, vec2f(0.0), vec2f(n - 1.0)));
+        let stored = textureLoad(shadow_map, c, i32(layer), 0).x;
+        lit[k] = select(0.0, 1.0, value <= stored + bias);
+    }
+    return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
+}
+
+@fragment
+fn fs_main(i: VsOut) -> FsOut {
+    let to_eye = f.eye.xyz - i.world;
+    var n = normalize(cross(dpdx(i.world), dpdy(i.world)));
+    if (dot(n, to_eye) < 0.0) { n = -n; }
+    var radiance = vec3f(0.0);
+    let sigma_t = f.sigma_t.xyz;
+    if (is_point_light(f)) {
+        let d = f.light.xyz - i.world;
+        let dist = length(d);
+        let cos_i = abs(dot(n, d / dist));
+        let r = f.light_power.w;
+        let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
+        let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
+        radiance = i.albedo / PI * cos_i * e_in * visibility(i.world, bias);
+    } else {
+        let w = f.light.xyz;
+        let cos_i = abs(dot(n, w));
+        var l = 0.0;
+        let lo = f.medium_min.xyz;
+        let hi = f.medium_max.xyz;
+        if (all(i.world >= lo) && all(i.world <= hi)) {
+            l = exit_distance(i.world, w, lo, hi);
+        }
+        let e_in = f.light_power.xyz * exp(-sigma_t * l);
+        let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
+        radiance = i.albedo / PI * cos_i * e_in * visibility(i.world, bias);
+    }
+    var o: FsOut;
+    o.radiance = vec4f(radiance, 1.0);
+    o.distance = vec4f(length(to_eye), 0.0, 0.0, 0.0);
+    return o;
+}

@@ -1,0 +1,87 @@
+//! GPU time per pass from timestamp queries written on the *encoder* between passes.
+//!
+//! Pass-level timestamp writes are wrong on Mesa 22 (llvmpipe); encoder-level ones are right there
+//! and everywhere else, so that is the only kind we use.
+
+/// One pass's GPU time.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PassTiming {
+    pub pass: &'static str,
+    pub ms: f64,
+}
+
+/// Collects timestamps for one frame: `begin`, then `mark(pass)` after each pass.
+pub struct GpuTimer {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    capacity: u32,
+    labels: Vec<&'static str>,
+    period_ns: f32,
+}
+
+impl GpuTimer {
+    pub const CAPACITY: u32 = 32;
+
+    /// `None` when the device has no encoder timestamps.
+    pub fn new(ctx: &super::GpuContext) -> Option<GpuTimer> {
+        if !ctx.timestamps {
+            return None;
+        }
+        let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("GpuTimer::queries"),
+            ty: wgpu::QueryType::Timestamp,
+            count: Self::CAPACITY,
+        });
+        let resolve = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("GpuTimer::resolve"),
+            size: Self::CAPACITY as u64 * 8,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        Some(GpuTimer {
+            set,
+            resolve,
+            capacity: Self::CAPACITY,
+            labels: Vec::new(),
+            period_ns: ctx.queue.get_timestamp_period(),
+        })
+    }
+
+    /// Starts a frame.
+    pub fn begin(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.labels.clear();
+        self.labels.push("begin");
+        encoder.write_timestamp(&self.set, 0);
+    }
+
+    /// Marks the end of `pass` (and the start of the next).
+    pub fn mark(&mut self, encoder: &mut wgpu::CommandEncoder, pass: &'static str) {
+        let i = self.labels.len() as u32;
+        if i < self.capacity {
+            encoder.write_timestamp(&self.set, i);
+            self.labels.push(pass);
+        }
+    }
+
+    /// Resolves the queries into the readback buffer; call before `finish`.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        let n = self.labels.len() as u32;
+        if n > 0 {
+            encoder.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
+        }
+    }
+
+    /// Reads the times back (blocking) after the frame's submission.
+    pub fn read(&self, ctx: &super::GpuContext) -> Result<Vec<PassTiming>, super::GpuError> {
+        let bytes = ctx.read_buffer(&self.resolve)?;
+        let stamps: &[u64] = bytemuck::cast_slice(&bytes);
+        let mut out = Vec::new();
+        for i in 1..self.labels.len() {
+            let dt = stamps[i].wrapping_sub(stamps[i - 1]);
+            // A counter that went backwards is a driver bug; report 0 rather than 584 years.
+            let ms = if stamps[i] >= stamps[i - 1] { dt as f64 * self.period_ns as f64 * 1e-6 } else { 0.0 };
+            out.push(PassTiming { pass: self.labels[i], ms });
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,173 @@
+//! The per-frame uniforms every pass reads (`Frame` in `shaders/common.wgsl`).
+
+use crate::epipolar::{EpipolarFrame, GridMapping, LightGeom};
+use crate::params::{BinSpacing, Light};
+use crate::scene::{Aabb, Scene};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, UVec4, Vec4};
+
+pub const FLAG_POINT: u32 = 1;
+pub const FLAG_PHI_WRAPS: u32 = 2;
+pub const FLAG_COSINE_BINS: u32 = 4;
+pub const FLAG_CARTESIAN: u32 = 8;
+
+/// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct FrameUniforms {
+    pub cam_right: Vec4,
+    pub cam_up: Vec4,
+    pub cam_fwd: Vec4,
+    pub eye: Vec4,
+    pub view_proj: Mat4,
+    pub light: Vec4,
+    pub light_power: Vec4,
+    pub axis: Vec4,
+    pub b1: Vec4,
+    pub b2: Vec4,
+    pub sigma_s: Vec4,
+    pub sigma_t: Vec4,
+    pub ranges: Vec4,
+    pub medium_min: Vec4,
+    pub medium_max: Vec4,
+    pub grid: UVec4,
+    pub image: UVec4,
+    pub table: UVec4,
+}
+
+/// Everything derived from the scene for one frame on the CPU.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameSetup {
+    pub uniforms: FrameUniforms,
+    pub frame: EpipolarFrame,
+    pub mapping: GridMapping,
+    pub width: u32,
+    pub height: u32,
+    pub method: Method,
+}
+
+/// Which shadow-volume grid a frame uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Voxelized Epipolar Shadow Volumes: planes around the eye-light axis (any light).
+    #[default]
+    Vsv,
+    /// The paper's screen-space Cartesian grid (its section 2): only for a directional light along
+    /// a screen axis, whose light rays then follow the grid's rows or columns.
+    Cartesian,
+}
+
+/// Why a frame cannot be set up.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FrameError {
+    #[error("the eye sits exactly on the point light; move one of them")]
+    EyeOnLight,
+    #[error(
+        "the Cartesian method needs a directional light along the camera's x or y axis (it is {off_deg:.2} degrees          off the nearest, {name}); for this camera use --light-dir {suggest}"
+    )]
+    NotAxisAligned { off_deg: f64, name: &'static str, suggest: String },
+    #[error("the Cartesian method needs a directional light; use --light-dir or --method vsv")]
+    NotDirectional,
+}
+
+/// Largest angle between a Cartesian light and its screen axis: the scan assumes light rays stay in
+/// one grid row, so a tilt of `delta` shifts them by `delta * depth` — keep that below a texel.
+pub const CARTESIAN_TOLERANCE_DEG: f64 = 0.05;
+
+/// Rows and columns of the point-light scatter table (see `scatter_table.rs`).
+pub const TABLE_ROWS: u32 = 256;
+pub const TABLE_COLS: u32 = 512;
+
+impl FrameSetup {
+    pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {
+        let cam = &scene.camera;
+        let aspect = width as f64 / height as f64;
+        let frame = EpipolarFrame::new(cam.eye.as_dvec3(), LightGeom::from(&scene.light)).ok_or(FrameError::EyeOnLight)?;
+        let bounds: Aabb = scene.bounds();
+        let mut mapping = GridMapping::fit(&frame, cam, aspect, &bounds, scene.grid);
+        let [r, u, f] = cam.basis_f64();
+        let mut cartesian_axis = 0u32;
+        if method == Method::Cartesian {
+            let LightGeom::Directional(w) = frame.light else { return Err(FrameError::NotDirectional) };
+            let axes = [
+                (glam::DVec3::from(r), "+x (right)"),
+                (-glam::DVec3::from(r), "-x (left)"),
+                (glam::DVec3::from(u), "+y (up)"),
+                (-glam::DVec3::from(u), "-y (down)"),
+            ];
+            let (best, off) = (0..4)
+                .map(|i| (i, crate::epipolar::angle_between(axes[i].0, w)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, std::f64::consts::PI));
+            if off.to_degrees() > CARTESIAN_TOLERANCE_DEG {
+                let s = axes[best].0;
+                return Err(FrameError::NotAxisAligned {
+                    off_deg: off.to_degrees(),
+                    name: axes[best].1,
+                    suggest: format!("{:.6},{:.6},{:.6}", s.x, s.y, s.z),
+                });
+            }
+            cartesian_axis = best as u32;
+            // Bins: view depth over the casters' extent in front of the eye.
+            let fwd = glam::DVec3::from(f);
+            let c = bounds.center().as_dvec3() - frame.eye;
+            let rho = bounds.radius() as f64 * 1.001;
+            let depth = c.dot(fwd);
+            mapping.z_lo = (depth - rho).max(cam.near as f64);
+            mapping.z_hi = (depth + rho).max(mapping.z_lo * 1.001 + 1e-9);
+            mapping.spacing = BinSpacing::UniformAngle;
+        }
+        let th = (cam.fov_y_deg.to_radians() * 0.5).tan();
+        let tw = th * aspect as f32;
+        let v3 = |a: [f64; 3], w: f32| Vec4::new(a[0] as f32, a[1] as f32, a[2] as f32, w);
+        let (light, power) = match scene.light {
+            Light::Point { position, intensity, radius } => (position.extend(1.0), intensity.extend(radius)),
+            Light::Directional { direction, irradiance } => {
+                (direction.normalize_or(glam::Vec3::Y).extend(0.0), irradiance.extend(0.0))
+            }
+        };
+        let mut flags = 0;
+        if frame.is_point() {
+            flags |= FLAG_POINT;
+        }
+        if mapping.phi_wraps {
+            flags |= FLAG_PHI_WRAPS;
+        }
+        if mapping.spacing == BinSpacing::UniformCosine {
+            flags |= FLAG_COSINE_BINS;
+        }
+        if method == Method::Cartesian {
+            flags |= FLAG_CARTESIAN;
+        }
+        let mb = scene.medium_bounds();
+        let m = &scene.medium;
+        let dist = if frame.dist.is_finite() { frame.dist as f32 } else { 0.0 };
+        let uniforms = FrameUniforms {
+            cam_right: v3(r, tw),
+            cam_up: v3(u, th),
+            cam_fwd: v3(f, cam.near),
+            eye: cam.eye.extend(cam.far),
+            view_proj: cam.view_proj(aspect as f32),
+            light,
+            light_power: power,
+            axis: frame.axis.as_vec3().extend(dist),
+            b1: frame.b1.as_vec3().extend(mapping.phi0 as f32),
+            b2: frame.b2.as_vec3().extend(mapping.phi_span as f32),
+            sigma_s: m.sigma_s().extend(m.phase.g()),
+            sigma_t: m.sigma_t().extend(0.0),
+            ranges: Vec4::new(
+                mapping.gamma_lo as f32,
+                mapping.gamma_hi as f32,
+                mapping.z_lo as f32,
+                mapping.z_hi as f32,
+            ),
+            medium_min: mb.min.extend(0.0),
+            medium_max: mb.max.extend(0.0),
+            grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
+            image: UVec4::new(width, height, m.phase.id(), flags),
+            table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
+        };
+        Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
+    }
+}

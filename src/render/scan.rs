@@ -1,0 +1,33 @@
+//! Scan: the shadow volume as an inclusive prefix-OR of the geometry bits along each light ray,
+//! in increasing gamma (`shaders/scan.wgsl`): `shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]`.
+
+use super::util::{compute_pipeline, storage_entry, uniform_entry};
+use crate::gpu::{GpuError, ShaderLibrary};
+use crate::params::Grid;
+
+pub struct Scan {
+    pipeline: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl Scan {
+    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Scan, GpuError> {
+        let module = lib.module(device, "scan.wgsl")?;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Scan::layout"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
+            ],
+        });
+        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout);
+        Ok(Scan { pipeline, layout })
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, grid: &Grid) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups((grid.planes * grid.words()).div_ceil(64), 1, 1);
+    }
+}

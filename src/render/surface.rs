@@ -1,0 +1,105 @@
+//! Surface: direct lighting of the surfaces with a shadow map, and the eye distance per pixel
+//! (`shaders/surface.wgsl`).
+//!
+//!   L_surface = albedo / pi * |cos theta_i| * V * E_in,  E_in = I0 exp(-sigma_t d) / (d^2 + r^2)
+//!   (point) or E0 exp(-sigma_t l) (directional). The view path's attenuation is the composite's.
+
+use super::scene_gpu::SceneGpu;
+use super::util::{scene_vertex_layout, texture_entry, uniform_entry};
+use crate::gpu::{GpuError, ShaderLibrary};
+
+pub struct Surface {
+    pipeline: wgpu::RenderPipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl Surface {
+    pub const RADIANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+    pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Surface, GpuError> {
+        let module = lib.module(device, "surface.wgsl")?;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Surface::layout"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
+                texture_entry(2, wgpu::ShaderStages::FRAGMENT, wgpu::TextureViewDimension::D2Array),
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Surface::pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("Surface::pipeline"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(scene_vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: Self::DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(Self::RADIANCE.into()), Some(Self::DISTANCE.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Ok(Surface { pipeline, layout })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        geometry: &SceneGpu,
+        radiance: &wgpu::TextureView,
+        distance: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
+        let color = |view, clear: f64| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r: clear, g: 0.0, b: 0.0, a: 0.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("Surface::pass"),
+            // Distance -1 marks the sky.
+            color_attachments: &[color(radiance, 0.0), color(distance, -1.0)],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
+        pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..geometry.index_count, 0, 0..1);
+    }
+}
