@@ -23,26 +23,29 @@
 
 // ---- point light ---------------------------------------------------------------------------
 
-fn table_row(row: u32, psi: f32) -> vec3f {
-    let rows = f.table.x;
+fn table_row(row: u32, u: f32) -> vec3f {
     let cols = f.table.y;
-    let gamma = f.ranges.x + f32(row) / f32(rows - 1u) * (f.ranges.y - f.ranges.x);
-    let u = clamp(psi / max(PI - gamma, 1e-6), 0.0, 1.0) * f32(cols);
-    let c0 = min(u32(u), cols - 1u);
+    let c = u * f32(cols);
+    let c0 = min(u32(c), cols - 1u);
     let base = row * (cols + 1u);
-    return mix(table[base + c0].xyz, table[base + c0 + 1u].xyz, u - f32(c0));
+    return mix(table[base + c0].xyz, table[base + c0 + 1u].xyz, c - f32(c0));
 }
 
-// G(gamma, psi), bilinear between the two table rows around gamma.
+// G(gamma, psi) / (pi - gamma): bilinear in (gamma, u = psi / (pi - gamma)) between the two table
+// rows around gamma. Interpolating at equal u (the same fraction of each row's extent) keeps rays
+// near gamma = pi, whose extent collapses, as accurate as the others.
 fn table_g(gamma: f32, psi: f32) -> vec3f {
     let rows = f.table.x;
     let gy = clamp((gamma - f.ranges.x) / (f.ranges.y - f.ranges.x), 0.0, 1.0) * f32(rows - 1u);
     let r0 = min(u32(gy), rows - 2u);
-    return mix(table_row(r0, psi), table_row(r0 + 1u, psi), gy - f32(r0));
+    let u = clamp(psi / max(PI - gamma, 1e-7), 0.0, 1.0);
+    return mix(table_row(r0, u), table_row(r0 + 1u, u), gy - f32(r0));
 }
 
 // Unshadowed weight of [0, psi_s] minus the shadowed runs of one grid ray.
-fn lit_point(base: u32, gamma: f32, psi_s: f32) -> vec3f {
+// Shadow runs are cut at psi_cut: the start of the surface's own bin when the surface faces the
+// light on the eye's side (that bin is set by the surface itself), psi_s otherwise.
+fn lit_point(base: u32, gamma: f32, psi_s: f32, psi_cut: f32) -> vec3f {
     var total = table_g(gamma, psi_s);
     let bins = f.grid.z;
     for (var w = 0u; w < f.grid.w; w++) {
@@ -53,8 +56,8 @@ fn lit_point(base: u32, gamma: f32, psi_s: f32) -> vec3f {
             let run = countTrailingZeros(~(bits >> start));
             let k0 = w * 32u + start;
             let psi_a = z_of_bin(f, f32(k0));
-            if (psi_a >= psi_s) { return total; }
-            let psi_b = min(z_of_bin(f, f32(k0 + run)), psi_s);
+            if (psi_a >= psi_cut) { return total; }
+            let psi_b = min(z_of_bin(f, f32(k0 + run)), psi_cut);
             total -= table_g(gamma, psi_b) - table_g(gamma, psi_a);
             if (start + run >= 32u) { break; }
             bits = bits & ~(((1u << run) - 1u) << start);
@@ -120,7 +123,7 @@ fn box_integral(v: vec3f, t_in: f32, a: f32, b: f32) -> vec3f {
 
 // z_scale converts a bin's z to distance along the view ray: t = z / z_scale (sin gamma for the
 // epipolar grid, cos of the angle to the view axis for the Cartesian one).
-fn lit_directional(base: u32, v: vec3f, z_scale: f32, t_in: f32, t_end: f32) -> vec3f {
+fn lit_directional(base: u32, v: vec3f, z_scale: f32, t_in: f32, t_end: f32, t_cut: f32) -> vec3f {
     var total = box_integral(v, t_in, t_in, t_end);
     for (var w = 0u; w < f.grid.w; w++) {
         var bits = grid[base + w];
@@ -130,8 +133,8 @@ fn lit_directional(base: u32, v: vec3f, z_scale: f32, t_in: f32, t_end: f32) -> 
             let run = countTrailingZeros(~(bits >> start));
             let k0 = w * 32u + start;
             let ta = max(z_of_bin(f, f32(k0)) / max(z_scale, 1e-12), t_in);
-            if (ta >= t_end) { return total; }
-            let tb = min(z_of_bin(f, f32(k0 + run)) / max(z_scale, 1e-12), t_end);
+            if (ta >= t_cut) { return total; }
+            let tb = min(z_of_bin(f, f32(k0 + run)) / max(z_scale, 1e-12), t_cut);
             total -= box_integral(v, t_in, ta, tb);
             if (start + run >= 32u) { break; }
             bits = bits & ~(((1u << run) - 1u) << start);
@@ -153,13 +156,19 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let a = f.axis.xyz;
     let gamma = angle_between(a, v);
     let gc = grid_coords(f, v);
-    let t_s = textureLoad(distance, vec2i(id.xy), 0).x;
+    let surface = textureLoad(distance, vec2i(id.xy), 0).xy;
+    let t_s = surface.x;
+    let facing = t_s >= 0.0 && surface.y > 0.5;
 
     // The four grid rays around the pixel and their bilinear weights.
     let planes = f.grid.x;
     let rays = f.grid.y;
+    // Planes blend around their centres. Rays blend from the pixel's own row toward the *next*
+    // one only: a row's bits hold every caster up to its end (inclusive scan), the previous row's
+    // may not yet hold a caster that lies just before the pixel, so blending backward would leak
+    // light through closed surfaces. Forward blending can only over-shadow, by under one row.
     let xf = gc.x - 0.5;
-    let yf = clamp(gc.y - 0.5, 0.0, f32(rays - 1u));
+    let yf = clamp(gc.y, 0.0, f32(rays - 1u));
     let x0f = floor(xf);
     let fx = xf - x0f;
     var x0: i32 = i32(x0f);
@@ -181,12 +190,18 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     if (is_point_light(f)) {
         var psi_s = PI - gamma;
         if (t_s >= 0.0) { psi_s = min(z_along(f, gamma, t_s), psi_s); }
+        var psi_cut = psi_s;
+        if (facing) { psi_cut = min(psi_s, z_of_bin(f, floor(bin_coord(f, psi_s)))); }
         var lit = vec3f(0.0);
         for (var k = 0; k < 4; k++) {
-            if (weights[k] > 0.0) { lit += weights[k] * lit_point(bases[k], gamma, psi_s); }
+            if (weights[k] > 0.0) { lit += weights[k] * lit_point(bases[k], gamma, psi_s, psi_cut); }
         }
-        let h = max(f.axis.w * sin(gamma), 1e-7 * f.axis.w);
-        l = f.sigma_s.xyz * f.light_power.xyz / h * max(lit, vec3f(0.0));
+        // The table holds G / (pi - gamma); the ray's weight is (pi - gamma) / h with h = D sin(gamma).
+        // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
+        let x = PI - gamma;
+        var ratio = 1.0 / f.axis.w;
+        if (x > 1e-4) { ratio = x / max(f.axis.w * sin(gamma), 1e-7 * f.axis.w); }
+        l = f.sigma_s.xyz * f.light_power.xyz * ratio * max(lit, vec3f(0.0));
     } else {
         let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
         var t_end = span.y;
@@ -195,8 +210,13 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             var lit = vec3f(0.0);
             var z_scale = sin(gamma);
             if (is_cartesian(f)) { z_scale = dot(v, f.cam_fwd.xyz); }
+            var t_cut = t_end;
+            if (facing && t_s <= t_end) {
+                let z_cut = z_of_bin(f, floor(bin_coord(f, t_s * z_scale)));
+                t_cut = clamp(z_cut / max(z_scale, 1e-12), span.x, t_end);
+            }
             for (var k = 0; k < 4; k++) {
-                if (weights[k] > 0.0) { lit += weights[k] * lit_directional(bases[k], v, z_scale, span.x, t_end); }
+                if (weights[k] > 0.0) { lit += weights[k] * lit_directional(bases[k], v, z_scale, span.x, t_end, t_cut); }
             }
             let ph = phase(f.image.z, f.sigma_s.w, cos(gamma));
             l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));

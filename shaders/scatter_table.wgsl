@@ -9,7 +9,8 @@
 // (the last factor is the light's softening radius r: 1/d^2 -> 1/(d^2 + r^2)). The exponent is one
 // number, never a product of exponentials, so thick media neither overflow nor underflow early.
 // Row j holds gamma_j = gamma_lo + j / (rows - 1) * (gamma_hi - gamma_lo); column c holds
-// psi = c / cols * (pi - gamma_j). Each cell is integrated with 4-point Gauss-Legendre.
+// psi = c / cols * (pi - gamma_j) and stores G / (pi - gamma_j). Each cell is integrated with
+// 4-point Gauss-Legendre.
 
 #import common
 
@@ -49,7 +50,10 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         for (var q = 0; q < 4; q++) {
             cell += w[q] * integrand(gamma, a + x[q] * width, h2);
         }
-        acc += cell * width;
+        // Stored divided by the ray's psi extent (pi - gamma): G / (pi - gamma) varies slowly with
+        // gamma even where the extent collapses (gamma -> pi, light behind the camera), so
+        // interpolating it between rows stays accurate.
+        acc += cell / f32(cols);
         table[base + c + 1u] = vec4f(acc, 0.0);
     }
 }

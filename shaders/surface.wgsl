@@ -6,6 +6,9 @@
 //
 // Also writes the distance t from the eye to the surface (negative for the sky): the integrate
 // pass ends each view ray there, and the composite pass attenuates L_surface by exp(-sigma_t t).
+// The second channel is 1 when the surface faces the light on the eye's side and the shadow map
+// says it is lit: then the voxel that
+// holds the surface itself does not shadow the stretch of the view ray just in front of it.
 
 #import common
 
@@ -83,6 +86,7 @@ fn fs_main(i: VsOut) -> FsOut {
     var n = normalize(cross(dpdx(i.world), dpdy(i.world)));
     if (dot(n, to_eye) < 0.0) { n = -n; }
     var radiance = vec3f(0.0);
+    var facing = 0.0;
     let sigma_t = f.sigma_t.xyz;
     if (is_point_light(f)) {
         let d = f.light.xyz - i.world;
@@ -91,7 +95,9 @@ fn fs_main(i: VsOut) -> FsOut {
         let r = f.light_power.w;
         let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
         let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
-        radiance = i.albedo / PI * cos_i * e_in * visibility(i.world, bias);
+        let vis = visibility(i.world, bias);
+        facing = select(0.0, 1.0, dot(n, d) > 0.0 && vis > 0.5);
+        radiance = i.albedo / PI * cos_i * e_in * vis;
     } else {
         let w = f.light.xyz;
         let cos_i = abs(dot(n, w));
@@ -103,10 +109,12 @@ fn fs_main(i: VsOut) -> FsOut {
         }
         let e_in = f.light_power.xyz * exp(-sigma_t * l);
         let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
-        radiance = i.albedo / PI * cos_i * e_in * visibility(i.world, bias);
+        let vis = visibility(i.world, bias);
+        facing = select(0.0, 1.0, dot(n, w) > 0.0 && vis > 0.5);
+        radiance = i.albedo / PI * cos_i * e_in * vis;
     }
     var o: FsOut;
     o.radiance = vec4f(radiance, 1.0);
-    o.distance = vec4f(length(to_eye), 0.0, 0.0, 0.0);
+    o.distance = vec4f(length(to_eye), facing, 0.0, 0.0);
     return o;
 }

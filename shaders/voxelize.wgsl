@@ -80,7 +80,10 @@ fn axis_hit(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
     let u = dot(tv, pv) / det;
     let qv = cross(tv, e1);
     let v = dot(d, qv) / det;
-    if (u < 0.0 || v < 0.0 || u + v > 1.0) { return vec2f(0.0, 0.0); }
+    // A small tolerance: an axis through an edge or vertex counts as a hit (both triangles of a
+    // quad pierced through its diagonal), which only makes the rectangle larger.
+    let eps = 1e-4;
+    if (u < -eps || v < -eps || u + v > 1.0 + eps) { return vec2f(0.0, 0.0); }
     return vec2f(1.0, dot(e2, qv) / det);
 }
 
@@ -165,6 +168,7 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
     var sx0 = 0.0;
     var sx1 = 0.0;
     if (!full_phi) {
+        // (the arc test below assumes the triangle subtends less than pi around the axis)
         var ph = array<f32, 3>(phi_of_dir(f, p0 - e), phi_of_dir(f, p1 - e), phi_of_dir(f, p2 - e));
         // sort
         if (ph[0] > ph[1]) { let t = ph[0]; ph[0] = ph[1]; ph[1] = t; }
@@ -175,6 +179,7 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
         var len = TAU - gaps.x;
         if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph[2]; len = TAU - gaps.y; }
         if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph[0]; len = TAU - gaps.z; }
+        if (len > PI - 1e-3) { full_phi = true; }
         let span = f.b2.w;
         // Arc relative to the first plane, in plane units.
         var u0 = start - f.b1.w;
@@ -198,6 +203,11 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
             x1 = max(ceil(clamp(hi, 0.0, span) * scale), x0 + 1.0);
             x1 = min(x1, planes);
         }
+    }
+    if (full_phi) {
+        x0 = 0.0;
+        x1 = planes;
+        second = false;
     }
     if (quad == 1u) {
         if (!second) { return o; }

@@ -15,7 +15,8 @@ pub struct Surface {
 
 impl Surface {
     pub const RADIANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-    pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+    /// Eye distance (negative for the sky) and whether the surface faces the light on the eye's side.
+    pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
     pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Surface, GpuError> {
