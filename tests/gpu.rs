@@ -119,3 +119,30 @@ fn timings_cover_every_pass() {
     assert!(out.timings.iter().all(|t| t.ms.is_finite() && t.ms >= 0.0));
     assert!(out.total_ms() > 0.0);
 }
+
+/// A broken shader edit is refused with file:line:column and the last good pipelines keep
+/// rendering the same picture; the fixed file loads again.
+#[test]
+fn broken_shader_reload_keeps_the_last_good_pipelines() {
+    let Some(mut r) = renderer() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    for (name, src) in epivox::gpu::shaders_embedded() {
+        std::fs::write(dir.path().join(name), src).unwrap();
+    }
+    let lib = epivox::gpu::ShaderLibrary::new(Some(dir.path().to_path_buf()));
+    r.reload(&lib).unwrap();
+    let scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
+    let before = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
+
+    let path = dir.path().join("integrate.wgsl");
+    let good = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, good.replace("let planes = f.grid.x;", "let planes = f.grid.x + ;")).unwrap();
+    let err = r.reload(&lib).unwrap_err().to_string();
+    assert!(err.starts_with("integrate.wgsl:"), "{err}");
+    let during = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
+    assert_eq!(before, during, "the picture changed after a failed reload");
+
+    std::fs::write(&path, good).unwrap();
+    r.reload(&lib).unwrap();
+    assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
+}

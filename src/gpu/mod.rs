@@ -4,7 +4,12 @@
 mod shaders;
 mod timing;
 
-pub use shaders::{ShaderError, ShaderLibrary, ShaderSource};
+pub use shaders::{ShaderError, ShaderLibrary, ShaderSource, EMBEDDED};
+
+/// The shaders compiled into the binary, as (file name, text).
+pub fn shaders_embedded() -> &'static [(&'static str, &'static str)] {
+    EMBEDDED
+}
 pub use timing::{GpuTimer, PassTiming};
 
 use std::sync::Arc;
@@ -81,6 +86,13 @@ impl GpuContext {
             timestamps: features.contains(Self::OPTIONAL_FEATURES),
             info,
         })
+    }
+
+    /// Wraps a device someone else opened (the editor's eframe window).
+    pub fn from_parts(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> GpuContext {
+        let info = adapter.get_info();
+        let timestamps = device.features().contains(Self::OPTIONAL_FEATURES);
+        GpuContext { adapter: Arc::new(adapter), device, queue, info, timestamps }
     }
 
     /// Adapter name and backend, for reports.

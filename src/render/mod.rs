@@ -71,6 +71,34 @@ struct GridResources {
     dummy: wgpu::TextureView,
 }
 
+/// Every pass, created together so that a reload either replaces all of them or none.
+struct Passes {
+    shadow_map: ShadowMap,
+    surface: Surface,
+    voxelize: Voxelize,
+    scan: Scan,
+    scatter_table: ScatterTable,
+    integrate: Integrate,
+    composite: Composite,
+}
+
+impl Passes {
+    fn new(ctx: &GpuContext, lib: &ShaderLibrary) -> Result<Passes, GpuError> {
+        let d = &ctx.device;
+        ctx.scoped("creating the pipelines", || -> Result<Passes, GpuError> {
+            Ok(Passes {
+                shadow_map: ShadowMap::new(d, lib, Renderer::SHADOW_MAP_SIZE.min(d.limits().max_texture_dimension_2d))?,
+                surface: Surface::new(d, lib)?,
+                voxelize: Voxelize::new(d, lib)?,
+                scan: Scan::new(d, lib)?,
+                scatter_table: ScatterTable::new(d, lib)?,
+                integrate: Integrate::new(d, lib)?,
+                composite: Composite::new(d, lib)?,
+            })
+        })?
+    }
+}
+
 /// Owns the passes and the resources of the current scene, size and grid.
 pub struct Renderer {
     pub ctx: GpuContext,
@@ -95,18 +123,8 @@ impl Renderer {
     pub const SHADOW_MAP_SIZE: u32 = 2048;
 
     pub fn new(ctx: GpuContext, lib: &ShaderLibrary) -> Result<Renderer, GpuError> {
+        let Passes { shadow_map, surface, voxelize, scan, scatter_table, integrate, composite } = Passes::new(&ctx, lib)?;
         let d = &ctx.device;
-        let (shadow_map, surface, voxelize, scan, scatter_table, integrate, composite) = ctx.scoped("creating the pipelines", || -> Result<_, GpuError> {
-            Ok((
-                ShadowMap::new(d, lib, Self::SHADOW_MAP_SIZE.min(d.limits().max_texture_dimension_2d))?,
-                Surface::new(d, lib)?,
-                Voxelize::new(d, lib)?,
-                Scan::new(d, lib)?,
-                ScatterTable::new(d, lib)?,
-                Integrate::new(d, lib)?,
-                Composite::new(d, lib)?,
-            ))
-        })??;
         let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Renderer::frame_uniforms"),
             size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -143,6 +161,30 @@ impl Renderer {
             targets: None,
             grid: None,
         })
+    }
+
+    /// Rebuilds every pipeline from `lib` (after a shader edit). On any error — WGSL that does not
+    /// parse or validate, or a pipeline wgpu refuses — the old pipelines stay and keep rendering.
+    pub fn reload(&mut self, lib: &ShaderLibrary) -> Result<(), GpuError> {
+        let p = Passes::new(&self.ctx, lib)?;
+        self.shadow_map = p.shadow_map;
+        self.surface = p.surface;
+        self.voxelize = p.voxelize;
+        self.scan = p.scan;
+        self.scatter_table = p.scatter_table;
+        self.integrate = p.integrate;
+        self.composite = p.composite;
+        Ok(())
+    }
+
+    /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
+    pub fn hdr_texture(&self) -> Option<&wgpu::Texture> {
+        self.targets.as_ref().map(|t| &t.hdr)
+    }
+
+    /// The in-scattered light of the last frame (RGBA32Float).
+    pub fn scatter_texture(&self) -> Option<&wgpu::Texture> {
+        self.targets.as_ref().map(|t| &t.scatter)
     }
 
     /// Uploads the scene's geometry (call again when the geometry changes).

@@ -1,0 +1,178 @@
+//! The `epivox` binary end to end: good runs produce files and JSON; every bad input gets one clear
+//! message naming the file or flag, and a non-zero exit, never a panic.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn epivox(args: &[&str], envs: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_epivox"));
+    c.args(args);
+    for (k, v) in envs {
+        c.env(k, v);
+    }
+    c.output().expect("run epivox")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs a command that must fail; returns its stderr after checking it did not panic.
+fn fails(args: &[&str], envs: &[(&str, &str)]) -> String {
+    let o = epivox(args, envs);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{args:?} succeeded; stderr: {err}");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    err
+}
+
+fn has_adapter() -> bool {
+    match epivox::gpu::GpuContext::headless() {
+        Ok(_) => true,
+        Err(e) => {
+            eprintln!("SKIPPED: no GPU adapter at all ({e})");
+            false
+        }
+    }
+}
+
+#[test]
+fn renders_the_builtin_scene_with_json_and_exr() {
+    if !has_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("shafts.png");
+    let exr = dir.path().join("scatter.exr");
+    let hdr = dir.path().join("hdr.exr");
+    let o = epivox(
+        &[
+            "render", "--out", png.to_str().unwrap(), "--size", "64x48", "--grid", "128x128x64", "--json",
+            "--scatter-exr", exr.to_str().unwrap(), "--hdr-exr", hdr.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is one JSON object");
+    assert_eq!(j["grid"], "128x128x64");
+    assert_eq!(j["pixels"], 64 * 48);
+    assert!(j["triangles"].as_u64().unwrap() > 100);
+    assert!(j["adapter"].as_str().unwrap().len() > 3);
+    let passes = j["passes_ms"].as_object().unwrap();
+    if !passes.is_empty() {
+        let sum: f64 = passes.values().map(|v| v.as_f64().unwrap()).sum();
+        assert!((sum - j["total_ms"].as_f64().unwrap()).abs() < 1e-6);
+        for p in ["voxelize", "scan", "integrate"] {
+            assert!(passes.contains_key(p), "no {p} timing in {j}");
+        }
+    }
+    for f in [&png, &exr, &hdr] {
+        assert!(f.metadata().unwrap().len() > 100, "{} is empty", f.display());
+    }
+    // compare: an image against itself is exact.
+    let o = epivox(&["compare", exr.to_str().unwrap(), exr.to_str().unwrap(), "--json"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["rel_rmse"].as_f64(), Some(0.0));
+    assert_eq!(j["max_abs"].as_f64(), Some(0.0));
+    // And the scattered light differs from the final image.
+    let o = epivox(&["compare", exr.to_str().unwrap(), hdr.to_str().unwrap()], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("rel RMSE"));
+}
+
+#[test]
+fn missing_and_malformed_scene_files_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let out = out.to_str().unwrap();
+    let missing = dir.path().join("nope.obj");
+    let err = fails(&["render", missing.to_str().unwrap(), "--out", out], &[]);
+    assert!(err.contains("nope.obj"), "{err}");
+
+    let cases: &[(&str, &str, &str)] = &[
+        ("bad.gltf", "{ this is not json", "bad.gltf"),
+        ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1 2\n", "bad.ply"),
+        ("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", "non-finite"),
+        ("empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no triangles"),
+        ("scene.toml", "format = 1\n[camera]\neye = [0, 0, 0]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n", "scene.toml"),
+        ("unknown.toml", "format = 1\ncolour = 3\n", "colour"),
+    ];
+    for (name, text, needle) in cases {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        let err = fails(&["render", p.to_str().unwrap(), "--out", out], &[]);
+        assert!(err.contains(needle), "{name}: expected '{needle}' in: {err}");
+        assert!(err.contains(name) || err.contains("non-finite") || err.contains("no triangles"), "{name}: {err}");
+    }
+    assert!(!Path::new(out).exists(), "a failed render wrote its output");
+}
+
+#[test]
+fn bad_flags_are_named() {
+    let out = std::env::temp_dir().join("epivox-never-written.png");
+    let out = out.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--grid", "64x64x33"], "multiple of 32"),
+        (&["--grid", "64x64"], "--grid"),
+        (&["--size", "0x64"], "--size"),
+        (&["--eye", "1,2"], "--eye"),
+        (&["--eye", "0,1,0", "--target", "0,1,0"], "degenerate camera"),
+        (&["--fov", "0"], "field of view"),
+        (&["--light-dir", "0,0,0"], "direction"),
+        (&["--exposure", "99"], "exposure"),
+        (&["--method", "cartesian"], "Cartesian"),
+    ];
+    for (flags, needle) in cases {
+        let mut args = vec!["render", "--out", out];
+        args.extend_from_slice(flags);
+        if *needle == "Cartesian" && !has_adapter() {
+            continue;
+        }
+        let err = fails(&args, &[]);
+        assert!(err.contains(needle), "{flags:?}: expected '{needle}' in: {err}");
+    }
+}
+
+#[test]
+fn bad_preset_names_the_field_and_renders_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("look.toml");
+    std::fs::write(&p, "format = 1\n[medium]\nscattering = [0.1, -2, 0.1]\n").unwrap();
+    let out = dir.path().join("o.png");
+    let err = fails(&["render", "--preset", p.to_str().unwrap(), "--out", out.to_str().unwrap()], &[]);
+    assert!(err.contains("look.toml") && err.contains("scattering"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn grid_larger_than_the_adapter_allows_says_so() {
+    if !has_adapter() {
+        return;
+    }
+    let out = std::env::temp_dir().join("epivox-too-large.png");
+    let err = fails(&["render", "--out", out.to_str().unwrap(), "--size", "16x16", "--grid", "8192x8192x2048"], &[]);
+    assert!(err.contains("8192x8192x2048") && err.contains("allows at most"), "{err}");
+}
+
+#[test]
+fn no_adapter_at_all_is_a_clear_error() {
+    let out = std::env::temp_dir().join("epivox-no-adapter.png");
+    let nowhere = "/nonexistent/icd.json";
+    let err = fails(
+        &["render", "--out", out.to_str().unwrap(), "--size", "16x16"],
+        &[("WGPU_BACKEND", "vulkan"), ("VK_ICD_FILENAMES", nowhere), ("VK_DRIVER_FILES", nowhere)],
+    );
+    assert!(err.contains("no GPU adapter"), "{err}");
+}
+
+#[test]
+fn compare_names_bad_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.exr");
+    std::fs::write(&junk, "not an exr").unwrap();
+    let err = fails(&["compare", junk.to_str().unwrap(), junk.to_str().unwrap()], &[]);
+    assert!(err.contains("junk.exr"), "{err}");
+    let err = fails(&["compare", "/nonexistent/a.exr", junk.to_str().unwrap()], &[]);
+    assert!(err.contains("a.exr"), "{err}");
+}
