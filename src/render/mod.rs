@@ -45,6 +45,13 @@ pub struct RenderOutput {
     pub setup: FrameSetup,
 }
 
+/// What one frame produced on the GPU side (timings and the fitted grid), without images.
+#[derive(Debug, Clone)]
+pub struct FrameInfo {
+    pub timings: Vec<PassTiming>,
+    pub setup: FrameSetup,
+}
+
 impl RenderOutput {
     pub fn total_ms(&self) -> f64 {
         self.timings.iter().map(|t| t.ms).sum()
@@ -237,8 +244,10 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame of `scene` at `width x height` with Voxelized Epipolar Shadow Volumes.
-    pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
+    /// Renders one frame of `scene` at `width x height` into the GPU targets
+    /// ([`Renderer::hdr_texture`], [`Renderer::scatter_texture`]) without reading the images back:
+    /// what an interactive viewer calls every frame.
+    pub fn render_frame(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameInfo, GpuError> {
         if self.geometry.as_ref().is_none_or(|(_, n)| *n != scene.triangle_count()) {
             self.set_scene(scene);
         }
@@ -341,6 +350,13 @@ impl Renderer {
         };
         self.timer = timer;
 
+        Ok(FrameInfo { timings, setup })
+    }
+
+    /// Renders one frame and reads the final and the scattered image back to the CPU.
+    pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
+        let FrameInfo { timings, setup } = self.render_frame(scene, width, height, method)?;
+        let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
             let mut img = Image::new(width, height);
             for (p, c) in img.pixels.iter_mut().zip(data.chunks_exact(4)) {
@@ -348,8 +364,8 @@ impl Renderer {
             }
             img
         };
-        let hdr = to_image(ctx.read_texture_rgba32f(&t.hdr)?);
-        let scatter = to_image(ctx.read_texture_rgba32f(&t.scatter)?);
+        let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
+        let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
         Ok(RenderOutput { hdr, scatter, timings, setup })
     }
 
