@@ -2,7 +2,8 @@
 # Runs every test of epivox on a fresh Debian/Ubuntu machine.
 #
 # 1. Installs, only when missing, what the tests need: the Mesa software Vulkan driver
-#    (lavapipe, so the GPU tests run without a GPU) and Xvfb (a virtual X display).
+#    (lavapipe, so the GPU tests run without a GPU), Xvfb (a virtual X display) and the DejaVu
+#    fonts (the benchmark plots' text).
 # 2. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset.
 #
 # Works from any directory; exits non-zero on the first failure.
@@ -13,7 +14,8 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 say() { printf '\n==> %s\n' "$*"; }
 
 # ---------------------------------------------------------------- system packages
-packages=(mesa-vulkan-drivers libvulkan1 xvfb xauth)
+# fonts-dejavu-core: the text of `epivox bench`'s plots (without it they are drawn text-free).
+packages=(mesa-vulkan-drivers libvulkan1 xvfb xauth fonts-dejavu-core)
 
 say "Checking system packages: ${packages[*]}"
 if ! command -v dpkg >/dev/null 2>&1; then

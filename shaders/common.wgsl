@@ -168,20 +168,29 @@ fn cell_dir(f: Frame, x: f32, y: f32) -> vec3f {
 
 // ---- phase functions (src/params.rs, Phase::eval) ------------------------------------------
 
-fn phase(id: u32, g: f32, c: f32) -> f32 {
+// The lobes' denominator 1 + g^2 - 2 g c, written as a sum of non-negative terms so that it keeps
+// its relative precision at the peak (numerical-stability fix, docs/stability.md): in f32 the plain
+// form cancels to ~1e-7 absolute while the peak value of |g| = 0.999 is d = 1e-6, a 10% error in
+// the phase there. omc = 1 - c, opc = 1 + c (exact when the caller knows the angle).
+fn lobe_den(g: f32, omc: f32, opc: f32) -> f32 {
+    if (g >= 0.0) { return (1.0 - g) * (1.0 - g) + 2.0 * g * omc; }
+    return (1.0 + g) * (1.0 + g) - 2.0 * g * opc;
+}
+
+fn phase_core(id: u32, g: f32, c: f32, omc: f32, opc: f32) -> f32 {
     switch id {
         case 1u: { // Henyey-Greenstein
-            let d = 1.0 + g * g - 2.0 * g * c;
-            return (1.0 - g * g) * INV_4PI / (d * sqrt(d));
+            let d = lobe_den(g, omc, opc);
+            return (1.0 - g) * (1.0 + g) * INV_4PI / (d * sqrt(d));
         }
         case 2u: { // Schlick
             let k = 1.55 * g - 0.55 * g * g * g;
-            let d = 1.0 - k * c;
-            return (1.0 - k * k) * INV_4PI / (d * d);
+            let d = select((1.0 + k) - k * opc, (1.0 - k) + k * omc, k >= 0.0); // 1 - k c
+            return (1.0 - k) * (1.0 + k) * INV_4PI / (d * d);
         }
         case 3u: { // Cornette-Shanks
-            let d = 1.0 + g * g - 2.0 * g * c;
-            return 3.0 * (1.0 - g * g) * (1.0 + c * c) / (8.0 * PI * (2.0 + g * g) * d * sqrt(d));
+            let d = lobe_den(g, omc, opc);
+            return 3.0 * (1.0 - g) * (1.0 + g) * (1.0 + c * c) / (8.0 * PI * (2.0 + g * g) * d * sqrt(d));
         }
         case 4u: { // Rayleigh
             return 3.0 * (1.0 + c * c) / (16.0 * PI);
@@ -190,11 +199,26 @@ fn phase(id: u32, g: f32, c: f32) -> f32 {
     }
 }
 
-// (1 - exp(-x)) / x, accurate for small x (the expm1 trap of DESIGN section 5).
+// The phase function of the cosine c of the deflection angle.
+fn phase(id: u32, g: f32, c: f32) -> f32 {
+    return phase_core(id, g, c, 1.0 - c, 1.0 + c);
+}
+
+// The phase function of the deflection angle theta itself: 1 -+ cos(theta) from half-angle sines,
+// exact near the lobes' peaks where cos(theta) has lost them (f32 cos(1e-3) keeps 1 - c to 12%).
+fn phase_of_angle(id: u32, g: f32, theta: f32) -> f32 {
+    let s = sin(0.5 * theta);
+    let co = cos(0.5 * theta);
+    return phase_core(id, g, cos(theta), 2.0 * s * s, 2.0 * co * co);
+}
+
+// (1 - exp(-x)) / x, accurate for small x (the expm1 trap of DESIGN section 5). The direct form
+// loses ~ulp / x (3e-5 at x = 1e-3, where the old 3-term series took over); the 7-term series is
+// used up to x = 0.5 (truncation x^7 / 8! < 2e-7) and the direct form beyond (error < 4e-7).
 fn one_minus_exp_over_x(x: vec3f) -> vec3f {
-    let series = 1.0 - x * 0.5 + x * x / 6.0;
+    let series = 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))));
     let direct = (1.0 - exp(-x)) / max(x, vec3f(1e-30));
-    return select(direct, series, abs(x) < vec3f(1e-3));
+    return select(direct, series, abs(x) < vec3f(0.5));
 }
 
 // A direction with no zero component, so slab tests never compute 0 * inf.

@@ -33,13 +33,19 @@ fn table_row(row: u32, u: f32) -> vec3f {
 
 // G(gamma, psi) / (pi - gamma): bilinear in (gamma, u = psi / (pi - gamma)) between the two table
 // rows around gamma. Interpolating at equal u (the same fraction of each row's extent) keeps rays
-// near gamma = pi, whose extent collapses, as accurate as the others.
+// near gamma = pi, whose extent collapses, as accurate as the others. The rows are quadratic in
+// gamma (scatter_table.wgsl); the weight between them is linear in gamma itself, which keeps G
+// linear toward a soft light (G ~ h there: G / h stays finite, as it must).
 fn table_g(gamma: f32, psi: f32) -> vec3f {
     let rows = f.table.x;
-    let gy = clamp((gamma - f.ranges.x) / (f.ranges.y - f.ranges.x), 0.0, 1.0) * f32(rows - 1u);
+    let q = clamp((gamma - f.ranges.x) / (f.ranges.y - f.ranges.x), 0.0, 1.0);
+    let gy = sqrt(q) * f32(rows - 1u);
     let r0 = min(u32(gy), rows - 2u);
+    let s0 = f32(r0) / f32(rows - 1u);
+    let s1 = f32(r0 + 1u) / f32(rows - 1u);
+    let wy = clamp((q - s0 * s0) / (s1 * s1 - s0 * s0), 0.0, 1.0);
     let u = clamp(psi / max(PI - gamma, 1e-7), 0.0, 1.0);
-    return mix(table_row(r0, u), table_row(r0 + 1u, u), gy - f32(r0));
+    return mix(table_row(r0, u), table_row(r0 + 1u, u), wy);
 }
 
 // Unshadowed weight of [0, psi_s] minus the shadowed runs of one grid ray.
@@ -188,20 +194,31 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
 
     var l = vec3f(0.0);
     if (is_point_light(f)) {
-        var psi_s = PI - gamma;
-        if (t_s >= 0.0) { psi_s = min(z_along(f, gamma, t_s), psi_s); }
+        // Within 1e-6 rad of the light the f32 angle is noise (~6e-8), so the point-light formulas use
+        // gp = max(gamma, 1e-6). For a soft light (r > 0) the table's G and h = D sin(gamma) both
+        // vanish linearly toward the light and their ratio keeps its finite limit; with the raw angle
+        // the 1e-7 D clamp of h below cut the pixel through the light by gamma / 1e-7, a random factor
+        // (numerical-stability fix, docs/stability.md, light/through-pixel-*).
+        let gp = max(gamma, 1e-6);
+        var psi_s = PI - gp;
+        if (t_s >= 0.0) { psi_s = min(z_along(f, gp, t_s), psi_s); }
         var psi_cut = psi_s;
         if (facing) { psi_cut = min(psi_s, z_of_bin(f, floor(bin_coord(f, psi_s)))); }
         var lit = vec3f(0.0);
         for (var k = 0; k < 4; k++) {
-            if (weights[k] > 0.0) { lit += weights[k] * lit_point(bases[k], gamma, psi_s, psi_cut); }
+            if (weights[k] > 0.0) { lit += weights[k] * lit_point(bases[k], gp, psi_s, psi_cut); }
         }
         // The table holds G / (pi - gamma); the ray's weight is (pi - gamma) / h with h = D sin(gamma).
         // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
-        let x = PI - gamma;
+        let x = PI - gp;
         var ratio = 1.0 / f.axis.w;
-        if (x > 1e-4) { ratio = x / max(f.axis.w * sin(gamma), 1e-7 * f.axis.w); }
-        l = f.sigma_s.xyz * f.light_power.xyz * ratio * max(lit, vec3f(0.0));
+        if (x > 1e-4) { ratio = x / max(f.axis.w * sin(gp), 1e-7 * f.axis.w); }
+        // The table has exp(-sigma_t D) factored out; it joins the log of the prefactor in one exp,
+        // so a bright light in a thick medium (sigma_t D > 87) is not flushed to 0 with exp(-sigma_t D)
+        // (numerical-stability fix, docs/stability.md, medium/thick-bright).
+        let pre = f.sigma_s.xyz * f.light_power.xyz * ratio;
+        let scale = exp(log(max(pre, vec3f(1e-38))) - f.sigma_t.xyz * f.axis.w);
+        l = select(vec3f(0.0), scale, pre > vec3f(0.0)) * max(lit, vec3f(0.0));
     } else {
         let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
         var t_end = span.y;
@@ -218,7 +235,8 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             for (var k = 0; k < 4; k++) {
                 if (weights[k] > 0.0) { lit += weights[k] * lit_directional(bases[k], v, z_scale, span.x, t_end, t_cut); }
             }
-            let ph = phase(f.image.z, f.sigma_s.w, cos(gamma));
+            // The deflection angle is gamma: the phase of the angle keeps the lobes' peaks exact.
+            let ph = phase_of_angle(f.image.z, f.sigma_s.w, gamma);
             l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));
         }
     }

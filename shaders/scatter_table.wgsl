@@ -8,7 +8,14 @@
 //
 // (the last factor is the light's softening radius r: 1/d^2 -> 1/(d^2 + r^2)). The exponent is one
 // number, never a product of exponentials, so thick media neither overflow nor underflow early.
-// Row j holds gamma_j = gamma_lo + j / (rows - 1) * (gamma_hi - gamma_lo); column c holds
+// The table holds G with exp(-sigma_t D) factored out (t + d >= D on every path): the integrate pass
+// folds it into one exp with the log of the prefactor, so the result survives sigma_t D > 87, where
+// exp(-sigma_t D) alone is below f32's range (docs/stability.md, medium/thick-bright).
+// Row j holds gamma_j = gamma_lo + (j / (rows - 1))^2 * (gamma_hi - gamma_lo): quadratic, so the
+// rows near gamma_lo (the light's own direction when it is on screen) are rows^2 / 2 times finer
+// there than uniform rows, where G changes fastest: the lobe of |g| -> 1 (width 1 - |g|) and a soft
+// light's core (width r / D); integrate.wgsl interpolates linearly in gamma between them
+// (numerical-stability fix, docs/stability.md, phase/hg-0.999, light/through-pixel-*). Column c holds
 // psi = c / cols * (pi - gamma_j) and stores G / (pi - gamma_j). Each cell is integrated with
 // 4-point Gauss-Legendre.
 
@@ -19,13 +26,18 @@
 
 fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
     let s = sin(gamma + psi);
-    let k = f.axis.w * (sin(psi) + sin(gamma)) / max(s, 1e-30);
+    // t + d - D = D (sin psi + sin gamma - sin(gamma + psi)) / sin(gamma + psi), with the numerator
+    // as 2 sin psi sin^2(gamma/2) + 2 sin gamma sin^2(psi/2): non-negative terms, no cancellation.
+    let sg = sin(0.5 * gamma);
+    let sp = sin(0.5 * psi);
+    let k = 2.0 * f.axis.w * (sin(psi) * sg * sg + sin(gamma) * sp * sp) / max(s, 1e-30);
     let sigma_t = f.sigma_t.xyz;
     let expo = select(sigma_t * k, vec3f(0.0), sigma_t == vec3f(0.0));
     let r = f.light_power.w;
     var soft = 1.0;
     if (r > 0.0) { soft = h2 / (h2 + r * r * s * s); }
-    return phase(f.image.z, f.sigma_s.w, cos(gamma + psi)) * exp(-expo) * soft;
+    // The deflection angle is gamma + psi: the phase of the angle keeps the lobes' peaks exact.
+    return phase_of_angle(f.image.z, f.sigma_s.w, gamma + psi) * exp(-expo) * soft;
 }
 
 @compute @workgroup_size(64)
@@ -34,7 +46,8 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let cols = f.table.y;
     let j = id.x;
     if (j >= rows) { return; }
-    let gamma = f.ranges.x + f32(j) / f32(rows - 1u) * (f.ranges.y - f.ranges.x);
+    let sj = f32(j) / f32(rows - 1u);
+    let gamma = f.ranges.x + sj * sj * (f.ranges.y - f.ranges.x);
     let h = f.axis.w * sin(gamma);
     let h2 = h * h;
     let width = (PI - gamma) / f32(cols);

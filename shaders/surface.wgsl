@@ -1,6 +1,7 @@
 // surface.wgsl: direct lighting of the surfaces, before the medium's view-path attenuation.
 //
-//   L_surface = albedo / pi * |cos theta_i| * V_shadow_map * E_in
+//   L_surface = albedo / pi * max(cos theta_i, 0) * V_shadow_map * E_in   (n faces the eye: an
+//   opaque sheet lit from behind stays dark in front)
 //   point:        E_in = I0 * exp(-sigma_t d) / (d^2 + r^2)
 //   directional:  E_in = E0 * exp(-sigma_t l(P)),  l = path toward the light inside the medium box
 //
@@ -14,7 +15,8 @@
 
 struct ShadowFaces {
     view_proj: array<mat4x4f, 6>,
-    // x: texels per side, y: depth bias (scene units), z: 1 point / 0 directional.
+    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
+    // z: 1 point / 0 directional.
     params: vec4f,
     // Directional: the reference point far on the light's side.
     origin: vec4f,
@@ -80,6 +82,14 @@ fn visibility(p: vec3f, bias: f32) -> f32 {
     return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
 }
 
+// Depth bias against shadow acne: a texel of the map covers texel / cos of the surface along the
+// light's direction, so the bias grows with the slope (capped where the surface grazes the light).
+fn slope_bias(texel: f32, cos_i: f32) -> f32 {
+    let c = max(cos_i, 1e-3);
+    let tan_i = sqrt(max(1.0 - c * c, 0.0)) / c;
+    return texel * (1.5 + 1.5 * min(tan_i, 8.0));
+}
+
 @fragment
 fn fs_main(i: VsOut) -> FsOut {
     let to_eye = f.eye.xyz - i.world;
@@ -91,16 +101,16 @@ fn fs_main(i: VsOut) -> FsOut {
     if (is_point_light(f)) {
         let d = f.light.xyz - i.world;
         let dist = length(d);
-        let cos_i = abs(dot(n, d / dist));
+        let cos_i = dot(n, d / dist);
         let r = f.light_power.w;
         let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
-        let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
-        let vis = visibility(i.world, bias);
-        facing = select(0.0, 1.0, dot(n, d) > 0.0 && vis > 0.5);
-        radiance = i.albedo / PI * cos_i * e_in * vis;
+        var vis = 0.0;
+        if (cos_i > 0.0) { vis = visibility(i.world, slope_bias(shadow.params.y * dist, cos_i)); }
+        facing = select(0.0, 1.0, vis > 0.5);
+        radiance = i.albedo / PI * max(cos_i, 0.0) * e_in * vis;
     } else {
         let w = f.light.xyz;
-        let cos_i = abs(dot(n, w));
+        let cos_i = dot(n, w);
         var l = 0.0;
         let lo = f.medium_min.xyz;
         let hi = f.medium_max.xyz;
@@ -108,10 +118,10 @@ fn fs_main(i: VsOut) -> FsOut {
             l = exit_distance(i.world, w, lo, hi);
         }
         let e_in = f.light_power.xyz * exp(-sigma_t * l);
-        let bias = shadow.params.y * (1.0 + 2.0 * (1.0 - cos_i));
-        let vis = visibility(i.world, bias);
-        facing = select(0.0, 1.0, dot(n, w) > 0.0 && vis > 0.5);
-        radiance = i.albedo / PI * cos_i * e_in * vis;
+        var vis = 0.0;
+        if (cos_i > 0.0) { vis = visibility(i.world, slope_bias(shadow.params.y, cos_i)); }
+        facing = select(0.0, 1.0, vis > 0.5);
+        radiance = i.albedo / PI * max(cos_i, 0.0) * e_in * vis;
     }
     var o: FsOut;
     o.radiance = vec4f(radiance, 1.0);

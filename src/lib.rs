@@ -19,6 +19,9 @@
 //!
 //! See `docs/architecture.md` for the longer version and `../shared/DESIGN.md` for the mathematics.
 
+pub mod bench;
+pub mod check;
+pub mod editor;
 pub mod epipolar;
 pub mod gpu;
 pub mod image;

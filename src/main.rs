@@ -1,4 +1,5 @@
-//! The `epivox` command: headless rendering and comparison (`epivox --help`).
+//! The `epivox` command: the editor (no arguments, or `edit`), headless rendering and comparison
+//! (`epivox --help`).
 
 mod cli;
 
@@ -10,12 +11,10 @@ fn main() {
     let result = match cli.command {
         Some(Command::Render(args)) => cli::render(args),
         Some(Command::Compare { a, b, json }) => cli::compare(&a, &b, json),
-        None => {
-            eprintln!(
-                "the editor is not built yet; render headless instead:\n  epivox render --out shafts.png\n(see `epivox --help`)"
-            );
-            std::process::exit(2);
-        }
+        Some(Command::Check(args)) => cli::check(args),
+        Some(Command::Bench(args)) => cli::bench(args),
+        Some(Command::Edit(args)) => cli::edit(args),
+        None => cli::edit(cli::EditArgs::default()),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

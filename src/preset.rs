@@ -11,6 +11,9 @@
 //! ```
 //! Only the fields a look needs are written; the rest keep the scene's values. Unknown fields,
 //! other format versions and out-of-range values are refused with a message naming the field.
+//!
+//! [`Preset::from_scene`] captures a look and [`Preset::save`] writes it atomically (a temporary
+//! file in the same folder, then a rename), so a crash never leaves half a preset behind.
 
 use crate::params::{Grid, Medium, ParamError, Phase};
 use crate::scene::Scene;
@@ -31,6 +34,8 @@ pub enum PresetError {
     Version { path: PathBuf, found: u32 },
     #[error("{path}: {source}")]
     Invalid { path: PathBuf, source: ParamError },
+    #[error("{path}: cannot write: {source}")]
+    Write { path: PathBuf, source: std::io::Error },
 }
 
 /// The medium fields a preset may set; absent ones keep the current value.
@@ -125,6 +130,116 @@ impl Preset {
             scene.grid = g;
         }
     }
+
+    /// The look of `scene` as a preset: the whole medium, the grid when it is not the default one,
+    /// and the exposure when it is not 0 (a preset holds only what the look needs).
+    pub fn from_scene(scene: &Scene, name: Option<&str>, exposure: f32) -> Preset {
+        let m = &scene.medium;
+        Preset {
+            format: FORMAT,
+            name: name.map(str::to_string).filter(|n| !n.trim().is_empty()),
+            medium: Some(MediumPatch {
+                scattering: Some(m.scattering),
+                absorption: Some(m.absorption),
+                density: Some(m.density),
+                phase: Some(m.phase),
+            }),
+            grid: (scene.grid != Grid::default()).then_some(scene.grid),
+            exposure: (exposure != 0.0).then_some(exposure),
+        }
+    }
+
+    /// The preset as TOML text, written by hand so that numbers keep their short `f32` spelling
+    /// (`0.1`, not `0.10000000149011612`) and the phase function stays on one line.
+    pub fn to_toml(&self) -> String {
+        fn num(v: f32) -> String {
+            let s = format!("{v}");
+            if s.contains(['.', 'e', 'E']) || !v.is_finite() {
+                s
+            } else {
+                format!("{s}.0") // keep it a TOML float
+            }
+        }
+        fn rgb(v: Vec3) -> String {
+            format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
+        }
+        let string = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let mut out = format!("format = {}\n", self.format);
+        if let Some(n) = &self.name {
+            out += &format!("name = {}\n", string(n));
+        }
+        if let Some(e) = self.exposure {
+            out += &format!("exposure = {}\n", num(e));
+        }
+        if let Some(m) = &self.medium {
+            out += "\n[medium]\n";
+            if let Some(v) = m.scattering {
+                out += &format!("scattering = {}\n", rgb(v));
+            }
+            if let Some(v) = m.absorption {
+                out += &format!("absorption = {}\n", rgb(v));
+            }
+            if let Some(v) = m.density {
+                out += &format!("density = {}\n", num(v));
+            }
+            if let Some(p) = m.phase {
+                let kind = Phase::KINDS[p.id() as usize];
+                out += &match p {
+                    Phase::HenyeyGreenstein { g } | Phase::Schlick { g } | Phase::CornetteShanks { g } => {
+                        format!("phase = {{ type = {}, g = {} }}\n", string(kind), num(g))
+                    }
+                    Phase::Isotropic | Phase::Rayleigh => format!("phase = {{ type = {} }}\n", string(kind)),
+                };
+            }
+        }
+        if let Some(g) = &self.grid {
+            let spacing = match g.spacing {
+                crate::params::BinSpacing::UniformAngle => "uniform-angle",
+                crate::params::BinSpacing::UniformCosine => "uniform-cosine",
+            };
+            out += &format!(
+                "\n[grid]\nplanes = {}\nrays = {}\nbins = {}\nspacing = {}\n",
+                g.planes,
+                g.rays,
+                g.bins,
+                string(spacing)
+            );
+        }
+        out
+    }
+
+    /// Writes the preset to `path` atomically: the text goes to a temporary file in the same folder,
+    /// is flushed to disk, and is then renamed over `path`. An existing `path` is replaced — callers
+    /// that must not overwrite (Save As) check first and ask. The text is parsed back before the
+    /// rename, so a preset that this build could not read again is never written.
+    pub fn save(&self, path: &Path) -> Result<(), PresetError> {
+        use std::io::Write;
+        let text = self.to_toml();
+        Self::parse(&text, path)?;
+        let write_err = |source| PresetError::Write { path: path.into(), source };
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let file_name = path.file_name().ok_or_else(|| {
+            write_err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "the path names no file"))
+        })?;
+        static COUNTER: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = dir.join(format!(".{}.{}-{n}.tmp", file_name.to_string_lossy(), std::process::id()));
+        let result = (|| {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(text.as_bytes())?;
+            f.sync_all()?;
+            drop(f);
+            std::fs::rename(&tmp, path)
+        })();
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(write_err(e));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -157,6 +272,52 @@ mod tests {
         assert!(e.contains("format"), "{e}");
         let e = parse("format = 1\n[grid]\nbins = 33\n").unwrap_err().to_string();
         assert!(e.contains("multiple of 32"), "{e}");
+    }
+
+    #[test]
+    fn save_and_load_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut scene = crate::scene::builtin_scene();
+        scene.medium = Medium {
+            scattering: Vec3::new(0.1, 0.25, 0.3333),
+            absorption: Vec3::new(0.0, 1.0, 1e-5),
+            density: 2.0,
+            phase: Phase::CornetteShanks { g: -0.35 },
+        };
+        scene.grid = Grid { planes: 512, rays: 256, bins: 64, spacing: crate::params::BinSpacing::UniformCosine };
+        let p = Preset::from_scene(&scene, Some("my \"look\""), 1.5);
+        let path = dir.path().join("look.toml");
+        p.save(&path).unwrap();
+        let back = Preset::load(&path).unwrap();
+        assert_eq!(back, p);
+        let mut other = crate::scene::builtin_scene();
+        back.apply(&mut other);
+        assert_eq!(other.medium, scene.medium);
+        assert_eq!(other.grid, scene.grid);
+        assert_eq!(back.exposure, Some(1.5));
+        // Short numbers stay short, and no temporary file is left behind.
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("scattering = [0.1, 0.25, 0.3333]"), "{text}");
+        assert!(text.contains("density = 2.0"), "{text}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // Default grid and zero exposure are left out.
+        let q = Preset::from_scene(&crate::scene::builtin_scene(), None, 0.0);
+        assert!(q.grid.is_none() == (crate::scene::builtin_scene().grid == Grid::default()));
+        assert_eq!(q.exposure, None);
+    }
+
+    #[test]
+    fn save_refuses_invalid_and_keeps_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("look.toml");
+        std::fs::write(&path, "format = 1\n").unwrap();
+        let mut p = Preset::from_scene(&crate::scene::builtin_scene(), None, 0.0);
+        p.medium.as_mut().unwrap().density = Some(-1.0);
+        let e = p.save(&path).unwrap_err().to_string();
+        assert!(e.contains("density"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "format = 1\n");
+        let e = p.save(&dir.path().join("no/such/dir/x.toml"));
+        assert!(e.is_err());
     }
 
     #[test]

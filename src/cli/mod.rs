@@ -1,5 +1,13 @@
 //! The command line: argument types and the headless commands (render, compare).
 
+mod bench;
+mod check;
+mod edit;
+
+pub use bench::bench;
+pub use check::check;
+pub use edit::{edit, EditArgs};
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use epivox::gpu::{GpuContext, ShaderLibrary};
@@ -21,6 +29,8 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
+    /// Open the editor (what `epivox` with no arguments does).
+    Edit(EditArgs),
     /// Render a scene to an image (the built-in scene when SCENE is omitted).
     Render(RenderArgs),
     /// Compare two EXR images: relative RMSE, max absolute error and PSNR of A against B.
@@ -33,6 +43,12 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the matrix of stiff and extreme cases through every method against the reference;
+    /// prints a table and exits non-zero when any case fails (docs/stability.md).
+    Check(check::CheckArgs),
+    /// Measure error against GPU time for every method and the ray-marching baseline; writes
+    /// results.csv, report.md and plots into --out.
+    Bench(bench::BenchArgs),
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
@@ -41,6 +57,8 @@ pub enum Method {
     Vsv,
     /// The paper's screen-space Cartesian variant (directional light along a screen axis).
     Cartesian,
+    /// The baseline: ray marching with one shadow-map lookup per step (--steps, --shadow-map, --jitter).
+    Raymarch,
     /// The exact f64 CPU reference.
     Reference,
 }
@@ -93,9 +111,21 @@ pub struct RenderArgs {
     /// Exposure in stops for the PNG.
     #[arg(long, allow_hyphen_values = true)]
     pub exposure: Option<f32>,
+    /// Turn off fitting the work to the frame (DESIGN section 6): full bin range from the casters.
+    #[arg(long)]
+    pub no_prune: bool,
     /// Reference: visibility samples per view ray.
     #[arg(long, default_value_t = 512)]
     pub samples: usize,
+    /// Raymarch: steps per view ray.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub steps: u32,
+    /// Shadow-map texels per side (the surfaces' shadows, and the raymarch baseline's visibility).
+    #[arg(long = "shadow-map", value_parser = clap::value_parser!(u32).range(16..=16384))]
+    pub shadow_map: Option<u32>,
+    /// Raymarch: offset the steps by a per-pixel random fraction (noise instead of banding).
+    #[arg(long)]
+    pub jitter: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -194,17 +224,27 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let pixels = w as u64 * h as u64;
     let started = Instant::now();
 
+    let mut pruned_z = None;
     let (hdr, scatter, out, adapter): (Image, Image, Option<RenderOutput>, String) = match args.method {
         Method::Reference => {
             let opts = reference::ReferenceOptions { samples: args.samples, progress: !args.json, ..Default::default() };
             let r = reference::render(&scene, w, h, &opts);
             (r.hdr, r.scatter, None, "cpu reference (f64)".to_string())
         }
-        Method::Vsv | Method::Cartesian => {
-            let method = if args.method == Method::Cartesian { GpuMethod::Cartesian } else { GpuMethod::Vsv };
+        Method::Vsv | Method::Cartesian | Method::Raymarch => {
+            let method = match args.method {
+                Method::Cartesian => GpuMethod::Cartesian,
+                Method::Raymarch => GpuMethod::Raymarch { steps: args.steps, jitter: args.jitter },
+                _ => GpuMethod::Vsv,
+            };
             let ctx = GpuContext::headless()?;
             let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
+            if let Some(size) = args.shadow_map {
+                renderer.set_shadow_map_size(size).context("--shadow-map")?;
+            }
+            renderer.prune = !args.no_prune;
             let o = renderer.render(&scene, w, h, method)?;
+            pruned_z = renderer.pruned_z_range()?;
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())
         }
     };
@@ -243,7 +283,13 @@ pub fn render(args: RenderArgs) -> Result<()> {
             let m = &o.setup.mapping;
             j["ranges"] = serde_json::json!({
                 "phi0": m.phi0, "phi_span": m.phi_span, "gamma": [m.gamma_lo, m.gamma_hi], "z": [m.z_lo, m.z_hi],
+                "z_fitted_to_visible_depth": pruned_z.map(|(lo, hi)| [lo, hi]),
             });
+        }
+        if args.method == Method::Raymarch {
+            j["steps"] = serde_json::json!(args.steps);
+            j["jitter"] = serde_json::json!(args.jitter);
+            j["shadow_map"] = serde_json::json!(args.shadow_map.unwrap_or(Renderer::SHADOW_MAP_SIZE));
         }
         println!("{}", serde_json::to_string_pretty(&j)?);
     } else {

@@ -17,6 +17,9 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),
     ("integrate.wgsl", include_str!("../../shaders/integrate.wgsl")),
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),
+    ("display.wgsl", include_str!("../../shaders/display.wgsl")),
+    ("ranges.wgsl", include_str!("../../shaders/ranges.wgsl")),
+    ("raymarch.wgsl", include_str!("../../shaders/raymarch.wgsl")),
 ];
 
 /// A shader that failed to load, compose or validate.

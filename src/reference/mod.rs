@@ -27,12 +27,11 @@
 //! of the view segment from `E` to `P(t)`. `V` is 1 when the segment from the light to `P` (point)
 //! or the ray from `P` toward `w` (directional) meets no triangle.
 //!
-//! **Surface** (Lambertian, two-sided, every mesh casts and receives): the first hit `P_s` with the
-//! geometric normal `n` gets `L_surface = albedo/π · |dot(n, l)| · V_s · E_in`, where
-//! `E_in = I0 exp(-σt d)/(d² + r²)` (point) or `E0 exp(-σt l(P_s))` (directional) and `V_s` comes
-//! from a shadow ray leaving `P_s + 1e-6 · diagonal · n_l` (`n_l`: the normal flipped to face the
-//! light; `diagonal` of the triangles' bounding box). Note the `|cos|`: a surface lit from behind
-//! (a single-sided sheet with the light on the far side) shows the same radiance on both faces.
+//! **Surface** (Lambertian, opaque, every mesh casts and receives): the first hit `P_s` with the
+//! geometric normal flipped to face the eye, `n`, gets `L_surface = albedo/π · max(dot(n, l), 0) ·
+//! V_s · E_in`, where `E_in = I0 exp(-σt d)/(d² + r²)` (point) or `E0 exp(-σt l(P_s))`
+//! (directional) and `V_s` comes from a shadow ray leaving `P_s + 1e-6 · diagonal · n`
+//! (`diagonal` of the triangles' bounding box). A sheet lit from behind stays dark in front.
 //! Then `hdr = L_surface · T_view + L_scatter` with `T_view = exp(-σt ds)` (point) or
 //! `exp(-σt m(ds))` (directional); sky pixels get `hdr = L_scatter`. No ambient term, no near/far
 //! clipping (the camera's `near`/`far` are ignored: every triangle in front of the eye counts).
@@ -633,9 +632,12 @@ impl<'a> Reference<'a> {
                     (w, std::array::from_fn(|c| irradiance[c] * transmit(self.sigma_t[c], l)))
                 }
             };
-            let cos_i = h.normal.dot(to_light);
-            if cos_i != 0.0 && albedo.iter().any(|&a| a != 0.0) {
-                let n_l = if cos_i > 0.0 { h.normal } else { -h.normal };
+            // Opaque surfaces: only the side facing the eye is seen, and it is lit only when the
+            // light is on that side too (a sheet lit from behind stays dark in front).
+            let n_eye = if h.normal.dot(v) < 0.0 { h.normal } else { -h.normal };
+            let cos_i = n_eye.dot(to_light);
+            if cos_i > 0.0 && albedo.iter().any(|&a| a != 0.0) {
+                let n_l = n_eye;
                 let o = ps + n_l * (1e-6 * self.diagonal);
                 let tmax = match self.light {
                     LightF64::Point { pos, .. } => (pos - o).length(),

@@ -56,6 +56,9 @@ pub enum Method {
     /// The paper's screen-space Cartesian grid (its section 2): only for a directional light along
     /// a screen axis, whose light rays then follow the grid's rows or columns.
     Cartesian,
+    /// The baseline: `steps` samples per view ray with one shadow-map lookup each, optionally
+    /// jittered per pixel (`raymarch.rs`). Its uniforms are those of `Vsv`; it uses no grid.
+    Raymarch { steps: u32, jitter: bool },
 }
 
 /// Why a frame cannot be set up.

@@ -2,11 +2,14 @@
 //!
 //! ```text
 //! ShadowMap -> Surface -> Voxelize -> Scan -> ScatterTable (point light) -> Integrate -> Composite
+//! ShadowMap -> Surface -> Raymarch -> Composite                      (Method::Raymarch, the baseline)
 //! ```
 
 mod composite;
 mod frame;
 mod integrate;
+mod ranges;
+mod raymarch;
 mod scan;
 mod scatter_table;
 mod scene_gpu;
@@ -18,6 +21,8 @@ mod voxelize;
 pub use composite::Composite;
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
 pub use integrate::Integrate;
+pub use ranges::Ranges;
+pub use raymarch::{Raymarch, RaymarchUniforms};
 pub use scan::Scan;
 pub use scatter_table::ScatterTable;
 pub use scene_gpu::SceneGpu;
@@ -87,20 +92,24 @@ struct Passes {
     scatter_table: ScatterTable,
     integrate: Integrate,
     composite: Composite,
+    raymarch: Raymarch,
+    ranges: Ranges,
 }
 
 impl Passes {
-    fn new(ctx: &GpuContext, lib: &ShaderLibrary) -> Result<Passes, GpuError> {
+    fn new(ctx: &GpuContext, lib: &ShaderLibrary, shadow_map_size: u32) -> Result<Passes, GpuError> {
         let d = &ctx.device;
         ctx.scoped("creating the pipelines", || -> Result<Passes, GpuError> {
             Ok(Passes {
-                shadow_map: ShadowMap::new(d, lib, Renderer::SHADOW_MAP_SIZE.min(d.limits().max_texture_dimension_2d))?,
+                shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 surface: Surface::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib)?,
                 scan: Scan::new(d, lib)?,
                 scatter_table: ScatterTable::new(d, lib)?,
                 integrate: Integrate::new(d, lib)?,
                 composite: Composite::new(d, lib)?,
+                raymarch: Raymarch::new(d, lib)?,
+                ranges: Ranges::new(d, lib)?,
             })
         })?
     }
@@ -109,13 +118,11 @@ impl Passes {
 /// Owns the passes and the resources of the current scene, size and grid.
 pub struct Renderer {
     pub ctx: GpuContext,
-    shadow_map: ShadowMap,
-    surface: Surface,
-    voxelize: Voxelize,
-    scan: Scan,
-    scatter_table: ScatterTable,
-    integrate: Integrate,
-    composite: Composite,
+    passes: Passes,
+    /// Fit the frame's work to what it needs (DESIGN section 6); `false` is `--no-prune`.
+    pub prune: bool,
+    /// The library the passes were built from, kept to rebuild the shadow map at a new size.
+    lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
     shadow_uniforms: wgpu::Buffer,
     table: wgpu::Buffer,
@@ -123,6 +130,10 @@ pub struct Renderer {
     geometry: Option<(SceneGpu, usize)>,
     targets: Option<Targets>,
     grid: Option<GridResources>,
+    /// A copy of the grid taken between voxelize and scan (the geometry voxels), kept only while
+    /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
+    geometry_copy: Option<wgpu::Buffer>,
+    keep_geometry: bool,
 }
 
 impl Renderer {
@@ -130,7 +141,8 @@ impl Renderer {
     pub const SHADOW_MAP_SIZE: u32 = 2048;
 
     pub fn new(ctx: GpuContext, lib: &ShaderLibrary) -> Result<Renderer, GpuError> {
-        let Passes { shadow_map, surface, voxelize, scan, scatter_table, integrate, composite } = Passes::new(&ctx, lib)?;
+        let shadow_map_size = Self::SHADOW_MAP_SIZE.min(ctx.device.limits().max_texture_dimension_2d);
+        let passes = Passes::new(&ctx, lib, shadow_map_size)?;
         let d = &ctx.device;
         let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Renderer::frame_uniforms"),
@@ -153,13 +165,9 @@ impl Renderer {
         let timer = GpuTimer::new(&ctx);
         Ok(Renderer {
             ctx,
-            shadow_map,
-            surface,
-            voxelize,
-            scan,
-            scatter_table,
-            integrate,
-            composite,
+            passes,
+            prune: true,
+            lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
             table,
@@ -167,21 +175,51 @@ impl Renderer {
             geometry: None,
             targets: None,
             grid: None,
+            geometry_copy: None,
+            keep_geometry: false,
         })
     }
 
     /// Rebuilds every pipeline from `lib` (after a shader edit). On any error — WGSL that does not
     /// parse or validate, or a pipeline wgpu refuses — the old pipelines stay and keep rendering.
     pub fn reload(&mut self, lib: &ShaderLibrary) -> Result<(), GpuError> {
-        let p = Passes::new(&self.ctx, lib)?;
-        self.shadow_map = p.shadow_map;
-        self.surface = p.surface;
-        self.voxelize = p.voxelize;
-        self.scan = p.scan;
-        self.scatter_table = p.scatter_table;
-        self.integrate = p.integrate;
-        self.composite = p.composite;
+        self.passes = Passes::new(&self.ctx, lib, self.passes.shadow_map.size)?;
+        self.lib = lib.clone();
         Ok(())
+    }
+
+    /// Texels per side of each shadow-map layer.
+    pub fn shadow_map_size(&self) -> u32 {
+        self.passes.shadow_map.size
+    }
+
+    /// Rebuilds the shadow map at `size` texels per side (the ray-marching baseline's quality knob;
+    /// the surface pass uses it too). Refused, keeping the old map, when the adapter cannot hold it.
+    pub fn set_shadow_map_size(&mut self, size: u32) -> Result<(), GpuError> {
+        if size == self.passes.shadow_map.size {
+            return Ok(());
+        }
+        if size == 0 {
+            return Err(GpuError::Validation {
+                during: "setting the shadow-map size".into(),
+                message: "the shadow map needs at least one texel per side".into(),
+            });
+        }
+        self.ctx.check_texture("the shadow map", size, size)?;
+        let map = self.ctx.scoped("creating the shadow map", || ShadowMap::new(&self.ctx.device, &self.lib, size))??;
+        self.passes.shadow_map = map;
+        Ok(())
+    }
+
+    /// The bins' z range the last frame used after fitting it to the visible depth (`None` when
+    /// pruning was off or the method has no bins). Blocks on a 16-byte readback.
+    pub fn pruned_z_range(&self) -> Result<Option<(f32, f32)>, GpuError> {
+        if !self.prune {
+            return Ok(None);
+        }
+        let bytes = self.ctx.read_buffer(&self.passes.ranges.result)?;
+        let v: &[f32] = bytemuck::cast_slice(&bytes);
+        Ok(Some((v[1], v[2])).filter(|(lo, hi)| hi > lo))
     }
 
     /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
@@ -253,6 +291,14 @@ impl Renderer {
         }
         self.ensure_targets(width, height)?;
         self.ensure_grid(scene.grid)?;
+        if self.keep_geometry && self.geometry_copy.as_ref().is_none_or(|b| b.size() != scene.grid.bytes()) {
+            self.geometry_copy = Some(self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("Renderer::geometry_copy"),
+                size: scene.grid.bytes(),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }));
+        }
         let setup = FrameSetup::new(scene, width, height, method)?;
         let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("ensured above")
@@ -260,7 +306,7 @@ impl Renderer {
         let ctx = &self.ctx;
         let d = &ctx.device;
         ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
-        let (_, shadow_lookup, _) = self.shadow_map.uniforms(scene);
+        let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
         ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
 
         let bind = |label: &str, layout: &wgpu::BindGroupLayout, resources: &[wgpu::BindingResource]| {
@@ -278,20 +324,20 @@ impl Renderer {
         let frame = self.frame_buffer.as_entire_binding();
         let surface_bg = bind(
             "Surface::bind_group",
-            &self.surface.layout,
-            &[frame.clone(), self.shadow_uniforms.as_entire_binding(), R::TextureView(&self.shadow_map.map_view)],
+            &self.passes.surface.layout,
+            &[frame.clone(), self.shadow_uniforms.as_entire_binding(), R::TextureView(&self.passes.shadow_map.map_view)],
         );
         let voxelize_bg = bind(
             "Voxelize::bind_group",
-            &self.voxelize.layout,
+            &self.passes.voxelize.layout,
             &[frame.clone(), geometry.triangles.as_entire_binding(), g.bits.as_entire_binding()],
         );
-        let scan_bg = bind("Scan::bind_group", &self.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
+        let scan_bg = bind("Scan::bind_group", &self.passes.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
         let table_bg =
-            bind("ScatterTable::bind_group", &self.scatter_table.layout, &[frame.clone(), self.table.as_entire_binding()]);
+            bind("ScatterTable::bind_group", &self.passes.scatter_table.layout, &[frame.clone(), self.table.as_entire_binding()]);
         let integrate_bg = bind(
             "Integrate::bind_group",
-            &self.integrate.layout,
+            &self.passes.integrate.layout,
             &[
                 frame.clone(),
                 g.bits.as_entire_binding(),
@@ -300,9 +346,26 @@ impl Renderer {
                 R::TextureView(&t.scatter_view),
             ],
         );
+        let raymarch_bg = bind(
+            "Raymarch::bind_group",
+            &self.passes.raymarch.layout,
+            &[
+                frame.clone(),
+                self.shadow_uniforms.as_entire_binding(),
+                R::TextureView(&self.passes.shadow_map.map_view),
+                R::TextureView(&t.distance),
+                R::TextureView(&t.scatter_view),
+                self.passes.raymarch.uniforms.as_entire_binding(),
+            ],
+        );
+        let ranges_bg = bind(
+            "Ranges::bind_group",
+            &self.passes.ranges.layout,
+            &[frame.clone(), R::TextureView(&t.distance), self.passes.ranges.result.as_entire_binding()],
+        );
         let composite_bg = bind(
             "Composite::bind_group",
-            &self.composite.layout,
+            &self.passes.composite.layout,
             &[
                 frame,
                 R::TextureView(&t.radiance),
@@ -323,22 +386,34 @@ impl Renderer {
             }
         };
         // The frame: an ordered list of passes.
-        self.shadow_map.record(&ctx.queue, &mut enc, scene, geometry);
+        self.passes.shadow_map.record(&ctx.queue, &mut enc, scene, geometry);
         mark(&mut enc, "shadow_map");
-        self.surface.record(&mut enc, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
+        self.passes.surface.record(&mut enc, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
         mark(&mut enc, "surface");
-        enc.clear_buffer(&g.bits, 0, None);
-        self.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, geometry.triangle_count);
-        mark(&mut enc, "voxelize");
-        self.scan.record(&mut enc, &scan_bg, &scene.grid);
-        mark(&mut enc, "scan");
-        if scene.light.is_point() && method == Method::Vsv {
-            self.scatter_table.record(&mut enc, &table_bg);
-            mark(&mut enc, "scatter_table");
+        if let Method::Raymarch { steps, jitter } = method {
+            self.passes.raymarch.record(&ctx.queue, &mut enc, &raymarch_bg, width, height, steps, jitter);
+            mark(&mut enc, "raymarch");
+        } else {
+            if self.prune {
+                self.passes.ranges.record(&mut enc, &ranges_bg, &self.frame_buffer, width, height);
+                mark(&mut enc, "ranges");
+            }
+            enc.clear_buffer(&g.bits, 0, None);
+            self.passes.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, geometry.triangle_count);
+            mark(&mut enc, "voxelize");
+            if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
+                enc.copy_buffer_to_buffer(&g.bits, 0, copy, 0, g.bits.size());
+            }
+            self.passes.scan.record(&mut enc, &scan_bg, &scene.grid);
+            mark(&mut enc, "scan");
+            if scene.light.is_point() && method == Method::Vsv {
+                self.passes.scatter_table.record(&mut enc, &table_bg);
+                mark(&mut enc, "scatter_table");
+            }
+            self.passes.integrate.record(&mut enc, &integrate_bg, width, height);
+            mark(&mut enc, "integrate");
         }
-        self.integrate.record(&mut enc, &integrate_bg, width, height);
-        mark(&mut enc, "integrate");
-        self.composite.record(&mut enc, &composite_bg, width, height);
+        self.passes.composite.record(&mut enc, &composite_bg, width, height);
         mark(&mut enc, "composite");
         if let Some(tm) = timer.as_ref() {
             tm.resolve(&mut enc);
@@ -374,6 +449,24 @@ impl Renderer {
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
         let g = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
         Ok(bytemuck::cast_slice(&self.ctx.read_buffer(&g.bits)?).to_vec())
+    }
+
+    /// Keep a copy of the geometry voxels (the grid before the scan) of every following frame, for
+    /// [`Renderer::read_geometry_grid`]; off by default (it costs one grid copy per frame).
+    pub fn set_keep_geometry_grid(&mut self, keep: bool) {
+        self.keep_geometry = keep;
+        if !keep {
+            self.geometry_copy = None;
+        }
+    }
+
+    /// The geometry voxels of the last frame (before the scan), laid out as [`Renderer::read_grid`];
+    /// needs [`Renderer::set_keep_geometry_grid`] before that frame.
+    pub fn read_geometry_grid(&self) -> Result<Vec<u32>, GpuError> {
+        let b = self.geometry_copy.as_ref().filter(|_| self.keep_geometry).ok_or_else(|| {
+            GpuError::Readback("the geometry grid is not kept (Renderer::set_keep_geometry_grid)".into())
+        })?;
+        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(b)?).to_vec())
     }
 
     /// Uploads raw grid words (tests use it to check the scan in isolation).

@@ -26,7 +26,8 @@ pub struct FaceUniforms {
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct ShadowUniforms {
     pub view_proj: [Mat4; 6],
-    /// x: texels per side, y: bias (scene units), z: 1 point / 0 directional.
+    /// x: texels per side, y: texel size (directional: scene units; point: per unit distance),
+    /// z: 1 point / 0 directional.
     pub params: Vec4,
     pub origin: Vec4,
 }
@@ -149,8 +150,8 @@ impl ShadowMap {
                     let view = glam::camera::rh::view::look_to_mat4(l, d, up);
                     faces[i] = FaceUniforms { view_proj: proj * view, light: l.extend(1.0), origin: Vec4::ZERO };
                 }
-                // World size of a texel at the far side of the scene.
-                texel = 2.0 * ((l - c).length() + r) / self.size as f32;
+                // A 90-degree face: a texel spans 2 / size per unit of distance from the light.
+                texel = 2.0 / self.size as f32;
                 count = 6;
             }
             Light::Directional { direction, .. } => {
@@ -166,7 +167,7 @@ impl ShadowMap {
         }
         let lookup = ShadowUniforms {
             view_proj: faces.map(|f| f.view_proj),
-            params: Vec4::new(self.size as f32, texel * 1.5, if count == 6 { 1.0 } else { 0.0 }, 0.0),
+            params: Vec4::new(self.size as f32, texel, if count == 6 { 1.0 } else { 0.0 }, 0.0),
             origin: faces[0].origin,
         };
         (faces, lookup, count)

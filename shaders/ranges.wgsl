@@ -1,0 +1,57 @@
+// ranges.wgsl: the z range the bins must cover this frame, from the depth the Surface pass wrote.
+//
+// A view ray's points run from z = 0 at the eye to z_s at its surface (psi for a point light,
+// r = t sin(gamma) for a directional one, view depth for the Cartesian grid), and z grows along
+// the ray. No shadow bit beyond the largest visible z is ever read, so the bins only need
+//
+//   [z_lo, z_hi] = [casters' z_lo, min(casters' z_hi, max over pixels of z_s)]
+//
+// `reduce` takes that maximum with an atomic max on the float's bits (non-negative floats order
+// like their bit patterns); `finish` clamps it into the casters' range. The renderer then copies
+// the result into the frame uniforms' `ranges.zw` before the voxelizer runs, with no CPU round trip.
+
+#import common
+
+@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(1) var distance: texture_2d<f32>;
+// [0]: max visible z (float bits), [1], [2]: the final z_lo, z_hi (float bits).
+@group(0) @binding(2) var<storage, read_write> out: array<atomic<u32>, 4>;
+
+fn visible_z(p: vec2u) -> f32 {
+    let v = pixel_dir(f, vec2f(p));
+    let t_s = textureLoad(distance, vec2i(p), 0).x;
+    if (is_cartesian(f)) {
+        let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
+        var t = span.y;
+        if (t_s >= 0.0) { t = min(t, t_s); }
+        return max(t, 0.0) * dot(v, f.cam_fwd.xyz);
+    }
+    let gamma = angle_between(f.axis.xyz, v);
+    if (is_point_light(f)) {
+        if (t_s < 0.0) { return PI - gamma; }
+        return z_along(f, gamma, t_s);
+    }
+    let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
+    var t = span.y;
+    if (t_s >= 0.0) { t = min(t, t_s); }
+    return max(t, 0.0) * sin(gamma);
+}
+
+@compute @workgroup_size(8, 8)
+fn reduce(@builtin(global_invocation_id) id: vec3u) {
+    if (id.x >= f.image.x || id.y >= f.image.y) { return; }
+    let z = max(visible_z(id.xy), 0.0);
+    atomicMax(&out[0], bitcast<u32>(z));
+}
+
+@compute @workgroup_size(1)
+fn finish() {
+    let lo = f.ranges.z;
+    let hi = f.ranges.w;
+    // Half a percent of margin: the depth is per pixel centre, a neighbour's ray may reach a bit further.
+    var z = bitcast<f32>(atomicLoad(&out[0]));
+    z = z + 0.005 * (hi - lo);
+    let new_hi = clamp(z, lo + 1e-6 * max(hi - lo, 1e-30), hi);
+    atomicStore(&out[1], bitcast<u32>(lo));
+    atomicStore(&out[2], bitcast<u32>(new_hi));
+}

@@ -1,0 +1,527 @@
+//! `epivox bench`: error against run time for every method, side by side with the ray-marching
+//! baseline (DESIGN section 4).
+//!
+//! ```text
+//! scene ──► reference (cached on disk, cache.rs) ─────────────────────────┐
+//!   │                                                                      ▼
+//!   └──► sweep: VSV grids, Cartesian grids (when the light allows), ──► metrics::compare ──► Row
+//!        raymarch steps and shadow-map sizes; per point the median
+//!        GPU time of several frames after warm-up (encoder timestamps)
+//! procedural rooms (procedural.rs) and image sizes ──► time only ──► ScalingRow
+//! rows ──► results.csv, report.md, error_vs_time.png, time_vs_triangles.png, time_vs_resolution.png
+//! ```
+//!
+//! A benchmark measures; it asserts nothing. Every number in the report comes from this run (or,
+//! for the reference image, from the cache entry whose key says it was rendered from the same data).
+
+mod cache;
+mod plot;
+mod procedural;
+mod report;
+
+pub use cache::{cached_reference, reference_key, CacheStatus, CachedReference, KeyHasher};
+pub use plot::{has_text as plots_have_text, FONT_CANDIDATES};
+pub use procedural::procedural_scene;
+
+use crate::gpu::GpuError;
+use crate::image::ImageError;
+use crate::metrics::{self, ErrorStats, MetricsError};
+use crate::params::Grid;
+use crate::reference::ReferenceOptions;
+use crate::render::{FrameSetup, Method, Renderer};
+use crate::scene::Scene;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Why a benchmark could not run or write its results.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    #[error("comparing against the reference: {0}")]
+    Metrics(#[from] MetricsError),
+    #[error("cannot {op} {}: {source}", path.display())]
+    Io {
+        op: &'static str,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot draw the plot {}: {message}", path.display())]
+    Plot { path: PathBuf, message: String },
+    #[error("no benchmark point could be rendered; the first failure: {0}")]
+    NothingRendered(String),
+}
+
+/// How a benchmark runs.
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
+    /// Image size of the error sweep (and of the triangle sweep).
+    pub width: u32,
+    pub height: u32,
+    /// Tiny sweeps for CI (well under a minute on a software driver).
+    pub quick: bool,
+    /// Frames rendered and thrown away before measuring (pipeline compilation, caches).
+    pub warmup: usize,
+    /// Frames measured per point; the report gives their median.
+    pub frames: usize,
+    /// Where results.csv, report.md and the plots go.
+    pub out_dir: PathBuf,
+    /// Where reference images are cached.
+    pub cache_dir: PathBuf,
+    /// Progress bars on stderr.
+    pub progress: bool,
+    /// Also run the time-against-triangles and time-against-resolution sweeps.
+    pub scaling: bool,
+    pub reference: ReferenceOptions,
+}
+
+impl BenchOptions {
+    /// Defaults: 1024x1024 (64x64 quick), 1 warm-up frame, 5 measured (3 quick), the cache in
+    /// `out_dir/cache`, both scaling sweeps.
+    pub fn new(out_dir: impl Into<PathBuf>, quick: bool) -> BenchOptions {
+        let out_dir = out_dir.into();
+        let size = if quick { 64 } else { 1024 };
+        BenchOptions {
+            width: size,
+            height: size,
+            quick,
+            warmup: 1,
+            frames: if quick { 3 } else { 5 },
+            cache_dir: out_dir.join("cache"),
+            out_dir,
+            progress: false,
+            scaling: true,
+            reference: ReferenceOptions::default(),
+        }
+    }
+}
+
+/// One setting of one method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Point {
+    pub method: Method,
+    /// The grid (VSV, Cartesian); unused by the raymarch.
+    pub grid: Grid,
+    /// Shadow-map texels per side (every method shades its surfaces with it; the raymarch also
+    /// looks its visibility up in it).
+    pub shadow_map: u32,
+}
+
+impl Point {
+    fn grid(method: Method, planes: u32, rays: u32, bins: u32, shadow_map: u32) -> Point {
+        Point { method, grid: Grid { planes, rays, bins, ..Grid::default() }, shadow_map }
+    }
+    fn march(steps: u32, shadow_map: u32, jitter: bool) -> Point {
+        Point { method: Method::Raymarch { steps, jitter }, grid: Grid::default(), shadow_map }
+    }
+
+    pub fn method_name(&self) -> &'static str {
+        match self.method {
+            Method::Vsv => "vsv",
+            Method::Cartesian => "cartesian",
+            Method::Raymarch { .. } => "raymarch",
+        }
+    }
+
+    /// `1024x1024x256` or `256 steps, map 2048` (plus `, jitter`).
+    pub fn setting(&self) -> String {
+        match self.method {
+            Method::Raymarch { steps, jitter } => {
+                format!("{steps} steps, map {}{}", self.shadow_map, if jitter { ", jitter" } else { "" })
+            }
+            _ => self.grid.to_string(),
+        }
+    }
+}
+
+/// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, and 256² / 1024² at a few
+/// bin counts), the same for the Cartesian grid at fewer points, and the raymarch at 16 to 1024
+/// steps with a 2048² shadow map plus 512² to 4096² maps at 256 steps (and a jittered and a
+/// 1024-step / 4096² point). `quick`: two or three tiny points per method.
+pub fn error_sweep(quick: bool) -> Vec<Point> {
+    use Method::{Cartesian, Vsv};
+    if quick {
+        return vec![
+            Point::grid(Vsv, 64, 64, 32, 512),
+            Point::grid(Vsv, 128, 128, 64, 512),
+            Point::grid(Cartesian, 64, 64, 32, 512),
+            Point::grid(Cartesian, 128, 128, 64, 512),
+            Point::march(16, 256, false),
+            Point::march(64, 512, false),
+        ];
+    }
+    let map = Renderer::SHADOW_MAP_SIZE;
+    let mut v = Vec::new();
+    for bins in [32, 64, 128, 256, 512, 1024] {
+        v.push(Point::grid(Vsv, 512, 512, bins, map));
+    }
+    for (pr, bins) in [(256, 64), (256, 256), (1024, 64), (1024, 256), (1024, 1024)] {
+        v.push(Point::grid(Vsv, pr, pr, bins, map));
+    }
+    for (pr, bins) in [(512, 64), (512, 256), (1024, 256), (1024, 1024)] {
+        v.push(Point::grid(Cartesian, pr, pr, bins, map));
+    }
+    for steps in [16, 32, 64, 128, 256, 512, 1024] {
+        v.push(Point::march(steps, map, false));
+    }
+    for m in [512, 1024, 4096] {
+        v.push(Point::march(256, m, false));
+    }
+    v.push(Point::march(1024, 4096, false));
+    v.push(Point::march(64, map, true));
+    v
+}
+
+/// The two settings the scaling sweeps time: the paper's 1024x1024x256 grid and a 256-step march.
+pub fn scaling_points(quick: bool) -> [Point; 2] {
+    if quick {
+        [Point::grid(Method::Vsv, 64, 64, 32, 512), Point::march(32, 256, false)]
+    } else {
+        [Point::grid(Method::Vsv, 1024, 1024, 256, Renderer::SHADOW_MAP_SIZE), Point::march(256, Renderer::SHADOW_MAP_SIZE, false)]
+    }
+}
+
+/// Triangle counts of the procedural rooms.
+pub fn triangle_sweep(quick: bool) -> Vec<usize> {
+    if quick {
+        vec![2_000, 8_000]
+    } else {
+        vec![10_000, 100_000, 300_000, 1_000_000]
+    }
+}
+
+/// Square image sizes of the resolution sweep.
+pub fn resolution_sweep(quick: bool) -> Vec<u32> {
+    if quick {
+        vec![32, 64]
+    } else {
+        vec![256, 512, 1024, 2048]
+    }
+}
+
+/// Passes every method runs; the rest are the method's own ("volume" time).
+pub const SHARED_PASSES: [&str; 3] = ["shadow_map", "surface", "composite"];
+
+/// Median times of one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timing {
+    /// Median of the per-frame totals.
+    pub total_ms: f64,
+    /// Median of the per-frame sums of the method's own passes (not in [`SHARED_PASSES`]).
+    pub volume_ms: f64,
+    /// Median per pass, in pass order.
+    pub passes: Vec<(&'static str, f64)>,
+    pub frames: usize,
+}
+
+/// One point of the error sweep.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub point: Point,
+    pub timing: Timing,
+    /// The scattered light against the reference's.
+    pub scatter: ErrorStats,
+    /// The final image against the reference's.
+    pub hdr: ErrorStats,
+}
+
+/// One point of a scaling sweep.
+#[derive(Debug, Clone)]
+pub struct ScalingRow {
+    pub point: Point,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub timing: Timing,
+}
+
+/// Everything one benchmark measured.
+#[derive(Debug, Clone)]
+pub struct BenchResults {
+    pub scene: String,
+    pub triangles: usize,
+    pub light: String,
+    pub medium: String,
+    pub width: u32,
+    pub height: u32,
+    pub adapter: String,
+    /// "GPU timestamps" or, on an adapter without them, "wall clock (includes read-back)".
+    pub timing_source: &'static str,
+    pub reference_key: String,
+    pub reference_status: CacheStatus,
+    pub reference_path: PathBuf,
+    pub rows: Vec<Row>,
+    pub triangle_rows: Vec<ScalingRow>,
+    pub resolution_rows: Vec<ScalingRow>,
+    /// What was skipped and why.
+    pub notes: Vec<String>,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+    pub seconds: f64,
+}
+
+/// Renders `warmup + frames` frames of `point` and returns the medians and the last frame.
+fn measure(
+    r: &mut Renderer,
+    scene: &mut Scene,
+    width: u32,
+    height: u32,
+    point: &Point,
+    warmup: usize,
+    frames: usize,
+) -> Result<(Timing, crate::render::RenderOutput), GpuError> {
+    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
+    scene.grid = point.grid;
+    for _ in 0..warmup {
+        r.render(scene, width, height, point.method)?;
+    }
+    let frames = frames.max(1);
+    let mut per_frame: Vec<Vec<(&'static str, f64)>> = Vec::with_capacity(frames);
+    let mut last = None;
+    for _ in 0..frames {
+        let started = Instant::now();
+        let out = r.render(scene, width, height, point.method)?;
+        let t = if out.timings.is_empty() {
+            vec![("frame (wall clock)", started.elapsed().as_secs_f64() * 1e3)]
+        } else {
+            out.timings.iter().map(|t| (t.pass, t.ms)).collect()
+        };
+        per_frame.push(t);
+        last = Some(out);
+    }
+    let Some(last) = last else { unreachable!("frames >= 1") };
+    let total = median(per_frame.iter().map(|f| f.iter().map(|p| p.1).sum()).collect());
+    let volume = median(
+        per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
+    );
+    let passes = per_frame[0]
+        .iter()
+        .map(|&(name, _)| {
+            let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == name).map(|p| p.1)).collect();
+            (name, median(v))
+        })
+        .collect();
+    Ok((Timing { total_ms: total, volume_ms: volume, passes, frames }, last))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// For each (time, error) point: on the Pareto front, i.e. no other point is at least as fast and at
+/// least as accurate and strictly better in one. Non-finite points are never on it.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    let ok = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    points
+        .iter()
+        .map(|a| {
+            ok(a)
+                && !points.iter().any(|b| ok(b) && b.0 <= a.0 && b.1 <= a.1 && (b.0 < a.0 || b.1 < a.1))
+        })
+        .collect()
+}
+
+/// The time a method needs to reach `error`, read off its Pareto front (time, error) by linear
+/// interpolation in log-log between the two front points around it. `None` when no point of the
+/// front is that accurate; the fastest front point's time when even it is more accurate (then the
+/// true time may be lower: the sweep did not go faster).
+pub fn time_at_error(front: &[(f64, f64)], error: f64) -> Option<f64> {
+    let mut f: Vec<(f64, f64)> = front.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect();
+    f.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let i = f.iter().position(|p| p.1 <= error)?;
+    if i == 0 {
+        return Some(f[0].0);
+    }
+    let (a, b) = (f[i - 1], f[i]);
+    let s = (error.ln() - a.1.ln()) / (b.1.ln() - a.1.ln());
+    Some((a.0.ln() + s * (b.0.ln() - a.0.ln())).exp())
+}
+
+fn style(len: u64, progress: bool) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if !progress {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    if let Ok(s) = ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} {wide_msg}") {
+        bar.set_style(s.progress_chars("=> "));
+    }
+    bar
+}
+
+/// Runs the whole benchmark of `scene` on `renderer` and writes the files into `opts.out_dir`.
+pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Result<BenchResults, BenchError> {
+    let started = Instant::now();
+    let (w, h) = (opts.width, opts.height);
+    let out = &opts.out_dir;
+    std::fs::create_dir_all(out).map_err(|source| BenchError::Io { op: "create", path: out.clone(), source })?;
+    let mut notes = Vec::new();
+
+    // The reference first: it is what every point is compared against.
+    let reference = cached_reference(scene, w, h, &ReferenceOptions { progress: opts.progress, ..opts.reference }, &opts.cache_dir)?;
+    if let CacheStatus::Rendered { seconds } = reference.status {
+        if opts.progress {
+            eprintln!("reference rendered in {seconds:.1} s and cached as {}", reference.path.display());
+        }
+    }
+
+    let mut points = error_sweep(opts.quick);
+    if let Err(e) = FrameSetup::new(scene, w, h, Method::Cartesian) {
+        notes.push(format!("cartesian: skipped, it does not apply to this view and light: {e}"));
+        points.retain(|p| p.method != Method::Cartesian);
+    }
+    let scaling = scaling_points(opts.quick);
+    let tri_counts = if opts.scaling { triangle_sweep(opts.quick) } else { Vec::new() };
+    let sizes = if opts.scaling { resolution_sweep(opts.quick) } else { Vec::new() };
+    let total = points.len() + scaling.len() * (tri_counts.len() + sizes.len());
+    let bar = style(total as u64, opts.progress);
+    bar.set_prefix("bench");
+
+    let mut work = scene.clone();
+    let mut rows = Vec::new();
+    let mut first_failure = None;
+    for p in &points {
+        bar.set_message(format!("{} {}", p.method_name(), p.setting()));
+        match measure(renderer, &mut work, w, h, p, opts.warmup, opts.frames) {
+            Ok((timing, o)) => {
+                let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
+                let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
+                rows.push(Row { point: *p, timing, scatter, hdr });
+            }
+            Err(e) => {
+                let msg = format!("{} {}: skipped, it failed: {e}", p.method_name(), p.setting());
+                bar.println(&msg);
+                first_failure.get_or_insert_with(|| msg.clone());
+                notes.push(msg);
+            }
+        }
+        bar.inc(1);
+    }
+    if rows.is_empty() {
+        return Err(BenchError::NothingRendered(first_failure.unwrap_or_else(|| "the sweep is empty".into())));
+    }
+
+    let mut scale = |scene: &mut Scene, tri: usize, size: (u32, u32), sink: &mut Vec<ScalingRow>, notes: &mut Vec<String>| {
+        for p in &scaling {
+            bar.set_message(format!("{} {} at {}x{}, {tri} triangles", p.method_name(), p.setting(), size.0, size.1));
+            // Median of 3 after one warm-up: these points only time, and the largest take long.
+            match measure(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
+                Ok((timing, _)) => sink.push(ScalingRow { point: *p, triangles: tri, width: size.0, height: size.1, timing }),
+                Err(e) => notes.push(format!(
+                    "{} {} at {}x{} with {tri} triangles: skipped, it failed: {e}",
+                    p.method_name(),
+                    p.setting(),
+                    size.0,
+                    size.1
+                )),
+            }
+            bar.inc(1);
+        }
+    };
+    let mut triangle_rows = Vec::new();
+    for &n in &tri_counts {
+        let mut room = procedural_scene(n);
+        let tri = room.triangle_count();
+        scale(&mut room, tri, (w, h), &mut triangle_rows, &mut notes);
+    }
+    let mut resolution_rows = Vec::new();
+    for &s in &sizes {
+        let tri = work.triangle_count();
+        scale(&mut work, tri, (s, s), &mut resolution_rows, &mut notes);
+    }
+    bar.finish_and_clear();
+    if !opts.scaling {
+        notes.push("the triangle and resolution sweeps were not run (--no-scaling)".into());
+    }
+
+    let timing_source = if renderer.ctx.timestamps { "GPU timestamps" } else { "wall clock (includes read-back)" };
+    let light = match scene.light {
+        crate::params::Light::Point { position, intensity, radius } => {
+            format!("point light at {position}, intensity {intensity}, radius {radius}")
+        }
+        crate::params::Light::Directional { direction, irradiance } => {
+            format!("directional light toward {direction}, irradiance {irradiance}")
+        }
+    };
+    let m = &scene.medium;
+    let medium = format!("sigma_s {}, sigma_t {}, phase {:?}", m.sigma_s(), m.sigma_t(), m.phase);
+    let mut results = BenchResults {
+        scene: scene.name.clone(),
+        triangles: scene.triangle_count(),
+        light,
+        medium,
+        width: w,
+        height: h,
+        adapter: renderer.ctx.adapter_name(),
+        timing_source,
+        reference_key: reference.key.clone(),
+        reference_status: reference.status,
+        reference_path: reference.path.clone(),
+        rows,
+        triangle_rows,
+        resolution_rows,
+        notes,
+        files: Vec::new(),
+        seconds: 0.0,
+    };
+    if !plot::has_text() {
+        results.notes.push(format!(
+            "no font found ({}, or set EPIVOX_FONT): the plots have no text; the tables below label them",
+            FONT_CANDIDATES[0]
+        ));
+    }
+    results.files = report::write_all(&results, out)?;
+    results.seconds = started.elapsed().as_secs_f64();
+    // The report states the run time: write it once more now that it is known.
+    report::write_markdown(&results, out)?;
+    Ok(results)
+}
+
+/// The directory's files a benchmark writes.
+pub fn output_files(dir: &Path) -> [PathBuf; 5] {
+    [
+        dir.join("results.csv"),
+        dir.join("report.md"),
+        dir.join("error_vs_time.png"),
+        dir.join("time_vs_triangles.png"),
+        dir.join("time_vs_resolution.png"),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let p = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (4.0, 0.1), (2.0, 0.25), (f64::NAN, 0.0)];
+        assert_eq!(pareto_front(&p), [true, true, false, true, false, false]);
+    }
+
+    #[test]
+    fn time_at_error_interpolates_in_log_log() {
+        let f = [(1.0, 0.1), (100.0, 0.001)];
+        assert!((time_at_error(&f, 0.01).unwrap() - 10.0).abs() < 1e-9);
+        assert_eq!(time_at_error(&f, 0.5), Some(1.0));
+        assert_eq!(time_at_error(&f, 1e-4), None);
+    }
+
+    #[test]
+    fn medians() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(vec![]).is_nan());
+    }
+}

@@ -1,0 +1,176 @@
+//! Log-log line plots as PNG (plotters' bitmap backend, written with the `image` crate).
+//!
+//! Text needs a font file: the first of [`FONT_CANDIDATES`] (or `$EPIVOX_FONT`) that exists is read
+//! once and registered with plotters' `ab_glyph` backend. Without one the plots are drawn without any
+//! text (axes, ticks and curves only) and the report's tables carry the labels; a warning says so.
+
+use super::BenchError;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// Fonts looked for, in order (Debian/Ubuntu `fonts-dejavu-core`, Fedora, Arch, Liberation).
+pub const FONT_CANDIDATES: &[&str] = &[
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+];
+
+/// The font registered as "sans-serif", if one was found.
+fn font() -> Option<&'static Path> {
+    static FONT: OnceLock<Option<PathBuf>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        let env = std::env::var_os("EPIVOX_FONT").map(PathBuf::from);
+        let candidates = env.into_iter().chain(FONT_CANDIDATES.iter().map(PathBuf::from));
+        for path in candidates {
+            if let Ok(bytes) = std::fs::read(&path) {
+                // plotters keeps fonts for the life of the process: leak this one copy.
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
+                    return Some(path);
+                }
+            }
+        }
+        None
+    })
+    .as_deref()
+}
+
+/// Whether the plots carry text (a font was found).
+pub fn has_text() -> bool {
+    font().is_some()
+}
+
+/// One curve.
+pub struct Series {
+    pub name: String,
+    pub color: RGBColor,
+    /// (x, y), both positive (others are left out).
+    pub points: Vec<(f64, f64)>,
+    /// Per point: on the Pareto front (drawn filled and joined); `None` joins every point in x order.
+    pub front: Option<Vec<bool>>,
+}
+
+pub struct Plot<'a> {
+    pub title: &'a str,
+    pub x_desc: &'a str,
+    pub y_desc: &'a str,
+    pub series: Vec<Series>,
+}
+
+pub const COLORS: [RGBColor; 5] =
+    [RGBColor(0, 114, 178), RGBColor(213, 94, 0), RGBColor(0, 158, 115), RGBColor(204, 121, 167), RGBColor(86, 180, 233)];
+
+fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for v in values.filter(|v| v.is_finite() && *v > 0.0) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return 0.1..10.0;
+    }
+    if hi <= lo * 1.5 {
+        return lo / 2.0..hi * 2.0;
+    }
+    // A margin of a tenth of a decade on each side.
+    let pad = (hi / lo).powf(0.06);
+    lo / pad..hi * pad
+}
+
+/// Draws `plot` as a `width x height` PNG at `path`.
+pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), BenchError> {
+    let err = |e: String| BenchError::Plot { path: path.to_path_buf(), message: e };
+    let text = has_text();
+    let mut buf = vec![255u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let all = || plot.series.iter().flat_map(|s| s.points.iter());
+        let xr = log_range(all().map(|p| p.0));
+        let yr = log_range(all().map(|p| p.1));
+        let mut builder = ChartBuilder::on(&root);
+        builder.margin(16);
+        if text {
+            builder.caption(plot.title, ("sans-serif", 22)).x_label_area_size(48).y_label_area_size(72);
+        } else {
+            builder.x_label_area_size(8).y_label_area_size(8);
+        }
+        let mut chart = builder.build_cartesian_2d(xr.log_scale(), yr.log_scale()).map_err(|e| err(e.to_string()))?;
+        let mut mesh = chart.configure_mesh();
+        mesh.light_line_style(RGBColor(242, 242, 242));
+        if text {
+            mesh.x_labels(8)
+                .y_labels(10)
+                .x_desc(plot.x_desc)
+                .y_desc(plot.y_desc)
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 16))
+                .x_label_formatter(&|v| short(*v))
+                .y_label_formatter(&|v| short(*v));
+        } else {
+            mesh.x_labels(0).y_labels(0);
+        }
+        mesh.draw().map_err(|e| err(e.to_string()))?;
+
+        for s in &plot.series {
+            let pts: Vec<(usize, (f64, f64))> = s
+                .points
+                .iter()
+                .copied()
+                .enumerate()
+                .filter(|(_, (x, y))| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0)
+                .collect();
+            let color = s.color;
+            let on_front = |i: usize| s.front.as_ref().is_none_or(|f| f.get(i).copied().unwrap_or(false));
+            let mut line: Vec<(f64, f64)> = pts.iter().filter(|(i, _)| on_front(*i)).map(|(_, p)| *p).collect();
+            line.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let series = chart
+                .draw_series(LineSeries::new(line, color.stroke_width(2)))
+                .map_err(|e| err(e.to_string()))?;
+            if text {
+                series.label(s.name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            }
+            // Front points filled, the others hollow.
+            chart
+                .draw_series(pts.iter().map(|(i, p)| {
+                    let style = if on_front(*i) { color.filled() } else { color.stroke_width(1) };
+                    Circle::new(*p, 4, style)
+                }))
+                .map_err(|e| err(e.to_string()))?;
+        }
+        if text {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| err(e.to_string()))?;
+        }
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    let img = image::RgbImage::from_raw(width, height, buf).ok_or_else(|| err("plot buffer has the wrong size".into()))?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| BenchError::Io { op: "create", path: dir.to_path_buf(), source })?;
+    }
+    img.save_with_format(path, image::ImageFormat::Png).map_err(|e| err(e.to_string()))
+}
+
+/// Tick labels: 0.001, 0.5, 20, 3e4 (log axes span decades).
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (1e-3..1e4).contains(&a) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.0e}")
+    }
+}

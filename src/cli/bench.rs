@@ -1,0 +1,97 @@
+//! `epivox bench`: the command-line side of [`epivox::bench`].
+
+use anyhow::{Context, Result};
+use epivox::bench::{self, BenchOptions, CacheStatus};
+use epivox::gpu::{GpuContext, ShaderLibrary};
+use epivox::render::Renderer;
+use epivox::scene::{builtin_scene, load_scene};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// A mesh, a folder of meshes, a Mitsuba scene or a .toml scene file (the built-in scene when
+    /// omitted).
+    pub scene: Option<PathBuf>,
+    /// Folder for results.csv, report.md and the plots (created when missing).
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// Image size as WIDTHxHEIGHT [default: 1024x1024, 64x64 with --quick].
+    #[arg(long, value_parser = super::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Tiny sweeps (two or three points per method, small scaling sweeps): for CI and smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Frames measured per point; the report gives their median [default: 5, 3 with --quick].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub frames: Option<u32>,
+    /// Frames rendered before measuring (pipeline compilation, caches).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    /// Where reference images are cached [default: OUT/cache].
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Skip the time-against-triangles and time-against-resolution sweeps.
+    #[arg(long)]
+    pub no_scaling: bool,
+    /// Reference: visibility samples per view ray.
+    #[arg(long, default_value_t = 512)]
+    pub samples: usize,
+}
+
+pub fn bench(args: BenchArgs) -> Result<()> {
+    let scene = match &args.scene {
+        Some(p) => load_scene(p)?,
+        None => builtin_scene(),
+    };
+    let mut opts = BenchOptions::new(&args.out, args.quick);
+    if let Some((w, h)) = args.size {
+        opts.width = w;
+        opts.height = h;
+    }
+    if let Some(f) = args.frames {
+        opts.frames = f as usize;
+    }
+    opts.warmup = args.warmup as usize;
+    if let Some(c) = &args.cache_dir {
+        opts.cache_dir = c.clone();
+    }
+    opts.scaling = !args.no_scaling;
+    opts.progress = true;
+    opts.reference.samples = args.samples.max(2);
+
+    let ctx = GpuContext::headless()?;
+    let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
+    eprintln!(
+        "benchmarking {} ({} triangles) at {}x{} on {}",
+        scene.name,
+        scene.triangle_count(),
+        opts.width,
+        opts.height,
+        renderer.ctx.adapter_name()
+    );
+    let r = bench::run(&mut renderer, &scene, &opts).with_context(|| format!("benchmark into {}", args.out.display()))?;
+
+    println!("{:<10} {:<24} {:>11} {:>11}", "method", "setting", "total ms", "rel RMSE");
+    for row in &r.rows {
+        println!(
+            "{:<10} {:<24} {:>11.3} {:>10.3}%",
+            row.point.method_name(),
+            row.point.setting(),
+            row.timing.total_ms,
+            row.scatter.rel_rmse * 100.0
+        );
+    }
+    for n in &r.notes {
+        println!("note: {n}");
+    }
+    let reference = match r.reference_status {
+        CacheStatus::Hit => "from the cache".to_string(),
+        CacheStatus::Rendered { seconds } => format!("rendered in {seconds:.1} s"),
+    };
+    println!("reference {reference} ({})", r.reference_path.display());
+    println!("wrote, in {:.0} s:", r.seconds);
+    for f in &r.files {
+        println!("  {}", f.display());
+    }
+    Ok(())
+}

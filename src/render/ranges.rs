@@ -1,0 +1,75 @@
+//! Ranges: fits the bins' z range to what this frame can see (`shaders/ranges.wgsl`):
+//! `z_hi = min(casters' z_hi, max over pixels of the surface's z)`, computed on the GPU and copied
+//! into the frame uniforms before voxelization, so far-away geometry does not dilute the bins.
+
+use super::util::{storage_entry, texture_entry, uniform_entry};
+use crate::gpu::{GpuError, ShaderLibrary};
+
+pub struct Ranges {
+    reduce: wgpu::ComputePipeline,
+    finish: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+    /// `[max visible z, z_lo, z_hi, unused]` as float bits.
+    pub result: wgpu::Buffer,
+}
+
+impl Ranges {
+    /// Byte offset of `ranges.z` in [`super::FrameUniforms`]; `z_lo, z_hi` are copied there.
+    pub const UNIFORM_OFFSET: u64 = std::mem::offset_of!(super::FrameUniforms, ranges) as u64 + 8;
+
+    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Ranges, GpuError> {
+        let module = lib.module(device, "ranges.wgsl")?;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Ranges::layout"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                texture_entry(1, wgpu::ShaderStages::COMPUTE, wgpu::TextureViewDimension::D2),
+                storage_entry(2, wgpu::ShaderStages::COMPUTE, false),
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Ranges::pipeline_layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(&format!("Ranges::{entry}")),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let result = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Ranges::result"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Ranges { reduce: pipeline("reduce"), finish: pipeline("finish"), layout, result })
+    }
+
+    /// Reduces, then copies `[z_lo, z_hi]` into `frame_uniforms`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        frame_uniforms: &wgpu::Buffer,
+        width: u32,
+        height: u32,
+    ) {
+        encoder.clear_buffer(&self.result, 0, None);
+        {
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Ranges::pass"), timestamp_writes: None });
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.set_pipeline(&self.reduce);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            pass.set_pipeline(&self.finish);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(&self.result, 4, frame_uniforms, Self::UNIFORM_OFFSET, 8);
+    }
+}

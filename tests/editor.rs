@@ -1,0 +1,355 @@
+//! The editor, headless: egui_kittest drives the real `Editor` and renders it with wgpu (the
+//! software Vulkan driver in CI), viewport included, so the tests see what a user would see.
+//!
+//! The scenes use a small grid (128 x 128 x 64) and a small window: on the software driver a frame
+//! of the default 1024 x 1024 x 256 grid takes seconds.
+
+use eframe::egui;
+use eframe::egui_wgpu;
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use epivox::editor::{Command, Editor, EditorOptions};
+use epivox::gpu::{GpuContext, GpuError, EMBEDDED};
+use epivox::params::Grid;
+use epivox::scene::{builtin_scene, Scene};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// The app under test: the editor is created inside the first frame, on the harness's context.
+struct App {
+    make: Option<Box<dyn FnOnce(&egui::Context) -> Editor>>,
+    editor: Option<Editor>,
+}
+
+impl App {
+    fn ed(&self) -> &Editor {
+        self.editor.as_ref().expect("the editor exists after the first frame")
+    }
+    fn ed_mut(&mut self) -> &mut Editor {
+        self.editor.as_mut().expect("the editor exists after the first frame")
+    }
+}
+
+fn small_scene() -> Scene {
+    let mut s = builtin_scene();
+    s.grid = Grid { planes: 128, rays: 128, bins: 64, ..Grid::default() };
+    s
+}
+
+/// A harness around a fresh editor, or `None` (test skipped) without any GPU adapter.
+fn harness(opts: EditorOptions) -> Option<Harness<'static, App>> {
+    match GpuContext::headless() {
+        Err(GpuError::NoAdapter) => {
+            eprintln!("SKIPPED: no GPU adapter (install mesa-vulkan-drivers for the software one)");
+            return None;
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => {}
+    }
+    let rs = egui_kittest::wgpu::create_render_state(epivox::editor::wgpu_setup(), egui_wgpu::RendererOptions::default());
+    let rs2 = rs.clone();
+    let make = Box::new(move |ctx: &egui::Context| {
+        Editor::new(ctx, rs2, small_scene(), 0.0, None, &opts).unwrap_or_else(|e| panic!("{e}"))
+    });
+    let app = App { make: Some(make), editor: None };
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1200.0, 820.0))
+        .renderer(egui_kittest::wgpu::WgpuTestRenderer::from_render_state(rs))
+        .build_ui_state(
+            |ui, app: &mut App| {
+                if let Some(make) = app.make.take() {
+                    app.editor = Some(make(ui.ctx()));
+                }
+                if let Some(e) = app.editor.as_mut() {
+                    e.ui(ui);
+                }
+            },
+            app,
+        );
+    h.run();
+    Some(h)
+}
+
+/// Options with private folders, so that tests do not touch the user's config or presets.
+fn options(dir: &Path) -> EditorOptions {
+    let presets = dir.join("presets");
+    std::fs::create_dir_all(&presets).unwrap();
+    EditorOptions {
+        presets_dir: Some(presets),
+        config_dir: Some(dir.join("config")),
+        watch_shaders: false,
+        shader_dir: None,
+        ..EditorOptions::default()
+    }
+}
+
+/// Renders a frame and returns the viewport's pixels (RGBA8, row-major) and its size.
+fn viewport_pixels(h: &mut Harness<'static, App>) -> (Vec<[u8; 4]>, u32, u32) {
+    h.run();
+    let img = h.render().unwrap_or_else(|e| panic!("{e}"));
+    let r = h.state().ed().viewport_rect().expect("a viewport was laid out");
+    let ppp = h.ctx.pixels_per_point();
+    // Stay clear of the border (egui's frame, anti-aliasing).
+    let (x0, y0) = (((r.left() + 2.0) * ppp) as u32, ((r.top() + 2.0) * ppp) as u32);
+    let (x1, y1) = (((r.right() - 2.0) * ppp) as u32, ((r.bottom() - 2.0) * ppp) as u32);
+    let (x1, y1) = (x1.min(img.width()), y1.min(img.height()));
+    let mut px = Vec::new();
+    for y in y0..y1 {
+        for x in x0..x1 {
+            px.push(img.get_pixel(x, y).0);
+        }
+    }
+    (px, x1 - x0, y1 - y0)
+}
+
+fn distinct_colours(px: &[[u8; 4]]) -> usize {
+    let mut v: Vec<[u8; 4]> = px.to_vec();
+    v.sort();
+    v.dedup();
+    v.len()
+}
+
+/// Mean absolute difference per channel (0..255).
+fn mean_diff(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let s: u64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as i64 - q[c] as i64).unsigned_abs()).sum::<u64>()).sum();
+    s as f64 / (a.len() * 3) as f64
+}
+
+fn has_label_containing(h: &Harness<'static, App>, text: &str) -> bool {
+    h.query_all_by_label_contains(text).next().is_some()
+}
+
+/// The slider labelled `label` (its text label is a node of its own).
+fn slider<'a>(h: &'a Harness<'static, App>, label: &'a str) -> egui_kittest::Node<'a> {
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, label)
+}
+
+#[test]
+fn panels_exist_and_the_viewport_shows_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    for label in ["Presets", "Medium", "Phase function", "Light", "Grid", "Stats", "Accuracy", "Epipolar grid"] {
+        assert!(has_label_containing(&h, label), "no '{label}' in the editor");
+    }
+    for slider in ["density", "g (asymmetry)", "intensity", "planes", "rays", "bins", "exposure"] {
+        assert!(h.query_by_role_and_label(egui::accesskit::Role::Slider, slider).is_some(), "no '{slider}' slider");
+    }
+    // The shipped presets are listed.
+    let (px, w, hgt) = viewport_pixels(&mut h);
+    assert!(w > 100 && hgt > 100, "viewport {w}x{hgt}");
+    let n = distinct_colours(&px);
+    assert!(n > 200, "the viewport is (nearly) one colour: {n} colours");
+    assert_eq!(h.state().ed().frames_rendered(), 1);
+    // Nothing changed: drawing again does not render again.
+    let _ = viewport_pixels(&mut h);
+    let _ = viewport_pixels(&mut h);
+    assert!(h.state().ed().frames_rendered() <= 2, "re-rendered without a change");
+    // The stats show GPU time per pass when the adapter has timestamps, and the grid memory.
+    assert!(has_label_containing(&h, "grid memory"));
+    assert!(h.state().ed().frame_report().is_some_and(|r| r.result.is_ok()));
+}
+
+#[test]
+fn a_slider_changes_the_rendered_viewport_and_undo_restores_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let (before, ..) = viewport_pixels(&mut h);
+    let d0 = h.state().ed().look().medium.density;
+    slider(&h, "density").set_value_accesskit(4.0);
+    h.run();
+    assert_eq!(h.state().ed().look().medium.density, 4.0);
+    let (after, ..) = viewport_pixels(&mut h);
+    let diff = mean_diff(&before, &after);
+    assert!(diff > 2.0, "the viewport barely changed (mean difference {diff:.2} of 255)");
+    // Undo: back to the first look and the first picture.
+    assert!(h.state().ed().history().can_undo());
+    h.state_mut().ed_mut().apply(Command::Undo);
+    assert_eq!(h.state().ed().look().medium.density, d0);
+    let (undone, ..) = viewport_pixels(&mut h);
+    assert!(mean_diff(&before, &undone) < 0.5, "undo did not restore the picture");
+    h.state_mut().ed_mut().apply(Command::Redo);
+    assert_eq!(h.state().ed().look().medium.density, 4.0);
+    // The view modes change the picture too (scattered light only is darker than the final image).
+    h.state_mut().ed_mut().apply(Command::SetView(epivox::editor::ViewMode::Scattered));
+    let (scatter, ..) = viewport_pixels(&mut h);
+    assert!(mean_diff(&after, &scatter) > 1.0);
+}
+
+#[test]
+fn a_bad_preset_is_refused_with_its_field_named_and_the_look_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = options(dir.path());
+    let presets = opts.presets_dir.clone().unwrap();
+    std::fs::write(presets.join("broken.toml"), "format = 1\n[medium]\ndensity = -3.0\n").unwrap();
+    let Some(mut h) = harness(opts) else { return };
+    let look = *h.state().ed().look();
+    h.get_by_label("broken").click();
+    h.run();
+    assert_eq!(*h.state().ed().look(), look, "a refused preset changed the look");
+    assert!(has_label_containing(&h, "preset refused"), "no error shown");
+    assert!(has_label_containing(&h, "density"), "the error does not name the field");
+    // Unknown fields and other versions are refused as well, naming what is wrong.
+    let unknown = presets.join("unknown.toml");
+    std::fs::write(&unknown, "format = 1\n[medium]\ndensty = 2.0\n").unwrap();
+    h.state_mut().ed_mut().apply(Command::LoadPreset(unknown));
+    h.run();
+    assert!(has_label_containing(&h, "densty"));
+    let newer = presets.join("newer.toml");
+    std::fs::write(&newer, "format = 9\n").unwrap();
+    h.state_mut().ed_mut().apply(Command::LoadPreset(newer));
+    h.run();
+    assert!(has_label_containing(&h, "format = 9"));
+    assert_eq!(*h.state().ed().look(), look);
+    assert!(!h.state().ed().history().can_undo(), "a refused preset left an undo step");
+}
+
+#[test]
+fn saving_and_loading_a_preset_round_trips_and_never_overwrites_silently() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = options(dir.path());
+    let presets = opts.presets_dir.clone().unwrap();
+    let Some(mut h) = harness(opts) else { return };
+    slider(&h, "density").set_value_accesskit(2.5);
+    slider(&h, "g (asymmetry)").set_value_accesskit(-0.25);
+    h.run();
+    let saved = *h.state().ed().look();
+    // Type a name and save into the preset folder.
+    let field = h.get_by_role(egui::accesskit::Role::TextInput);
+    field.focus();
+    h.run();
+    h.get_by_role(egui::accesskit::Role::TextInput).type_text("My Look");
+    h.run();
+    h.get_by_label("Save to folder").click();
+    h.run();
+    let file = presets.join("my-look.toml");
+    assert!(file.is_file(), "{} not written", file.display());
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.contains("format = 1") && text.contains("density = 2.5"), "{text}");
+    // Change the look, then load the preset back from the list.
+    slider(&h, "density").set_value_accesskit(0.5);
+    h.run();
+    assert_ne!(h.state().ed().look().medium, saved.medium);
+    h.get_by_label("my-look").click();
+    h.run();
+    assert_eq!(h.state().ed().look().medium, saved.medium, "the preset did not round-trip");
+    // Saving again under the same name asks first, and Cancel keeps the file.
+    slider(&h, "density").set_value_accesskit(7.0);
+    h.run();
+    h.get_by_label("Save to folder").click();
+    h.run();
+    assert!(h.state().ed().confirming_overwrite().is_some(), "no question before overwriting");
+    assert!(has_label_containing(&h, "already exists"));
+    h.get_by_label("Cancel").click();
+    h.run();
+    assert!(h.state().ed().confirming_overwrite().is_none());
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), text, "the file changed without consent");
+    // Replace, when asked for, writes it.
+    h.get_by_label("Save to folder").click();
+    h.run();
+    h.get_by_label("Replace").click();
+    h.run();
+    assert!(std::fs::read_to_string(&file).unwrap().contains("density = 7.0"));
+    // No temporary files are left in the folder.
+    let names: Vec<String> =
+        std::fs::read_dir(&presets).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().to_string()).collect();
+    assert_eq!(names, vec!["my-look.toml".to_string()]);
+}
+
+/// Steps the harness until `done` holds or `timeout` passes (the watcher works on its own thread).
+fn wait_for(h: &mut Harness<'static, App>, timeout: Duration, done: impl Fn(&Editor) -> bool) -> bool {
+    let t0 = Instant::now();
+    while t0.elapsed() < timeout {
+        h.step();
+        if done(h.state().ed()) {
+            h.run();
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    false
+}
+
+fn copy_shaders(dir: &Path) -> PathBuf {
+    let d = dir.join("shaders");
+    std::fs::create_dir_all(&d).unwrap();
+    for (name, text) in EMBEDDED {
+        std::fs::write(d.join(name), text).unwrap();
+    }
+    d
+}
+
+#[test]
+fn a_broken_shader_keeps_the_picture_and_shows_the_error_until_fixed() {
+    let dir = tempfile::tempdir().unwrap();
+    let shaders = copy_shaders(dir.path());
+    let mut opts = options(dir.path());
+    opts.shader_dir = Some(shaders.clone());
+    opts.watch_shaders = true;
+    let Some(mut h) = harness(opts) else { return };
+    let (before, w, _) = viewport_pixels(&mut h);
+    let good = std::fs::read_to_string(shaders.join("integrate.wgsl")).unwrap();
+    // Break it: an undefined name on a known line.
+    let broken = good.replacen("fn ", "fn broken_fn() -> f32 { return undefined_name; }\nfn ", 1);
+    let line = broken.lines().position(|l| l.contains("undefined_name")).unwrap() + 1;
+    std::fs::write(shaders.join("integrate.wgsl"), &broken).unwrap();
+    assert!(
+        wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.is_some()),
+        "the watcher did not report the broken shader"
+    );
+    let err = h.state().ed().shader_error.clone().unwrap();
+    assert!(err.contains(&format!("integrate.wgsl:{line}:")), "the error does not name file:line:col: {err}");
+    assert!(has_label_containing(&h, "integrate.wgsl:"), "the error is not shown over the viewport");
+    // The picture stays (compare the lower half: the error text covers the top).
+    let (kept, ..) = viewport_pixels(&mut h);
+    let half = before.len() / 2 / w as usize * w as usize;
+    assert!(mean_diff(&before[half..], &kept[half..]) < 0.5, "the picture changed after a broken edit");
+    // Other edits still render with the last good pipelines.
+    slider(&h, "density").set_value_accesskit(3.0);
+    h.run();
+    let (edited, ..) = viewport_pixels(&mut h);
+    assert!(mean_diff(&before[half..], &edited[half..]) > 1.0, "edits stopped rendering after a broken shader");
+    // Fix it the way many editors save: write a temporary file, rename it over the original.
+    let tmp = shaders.join(".integrate.wgsl.swp-save");
+    std::fs::write(&tmp, &good).unwrap();
+    std::fs::rename(&tmp, shaders.join("integrate.wgsl")).unwrap();
+    assert!(
+        wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.is_none()),
+        "fixing the shader did not clear the error"
+    );
+    assert!(!has_label_containing(&h, "integrate.wgsl:"));
+    // Editing the shared module reloads everything too (and a broken one is reported by file).
+    let common = std::fs::read_to_string(shaders.join("common.wgsl")).unwrap();
+    std::fs::write(shaders.join("common.wgsl"), format!("{common}\nfn oops( {{\n")).unwrap();
+    assert!(
+        wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.as_deref().is_some_and(|m| m.contains("common.wgsl:"))),
+        "a broken common.wgsl was not reported"
+    );
+    std::fs::write(shaders.join("common.wgsl"), &common).unwrap();
+    assert!(wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.is_none()));
+}
+
+#[test]
+fn the_inspector_reads_the_grid_and_links_hover_both_ways() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let _ = viewport_pixels(&mut h);
+    // The grid is read back on the frame after a render.
+    let _ = viewport_pixels(&mut h);
+    assert!(has_label_containing(&h, "128 planes × 128 rays × 64 bins"), "no grid picture");
+    // Hover the middle of the viewport: the slice follows the plane under the pointer.
+    let r = h.state().ed().viewport_rect().unwrap();
+    h.hover_at(r.center());
+    h.run();
+    let _ = viewport_pixels(&mut h);
+    // Export the picture.
+    let png = dir.path().join("grid.png");
+    h.state_mut().ed_mut().apply(Command::ExportInspector(png.clone()));
+    let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+    assert!(img.width() >= 128 + 64 && img.height() == 128, "{}x{}", img.width(), img.height());
+    // A screenshot of the viewport.
+    let shot = dir.path().join("shot.png");
+    h.state_mut().ed_mut().apply(Command::Screenshot(shot.clone()));
+    assert!(image::open(&shot).is_ok());
+    assert!(h.state().ed().messages().iter().all(|m| !m.error), "{:?}", h.state().ed().messages());
+}
