@@ -6,6 +6,7 @@
 //! ```
 
 mod composite;
+mod cull;
 mod frame;
 mod integrate;
 mod ranges;
@@ -19,6 +20,7 @@ mod util;
 mod voxelize;
 
 pub use composite::Composite;
+pub use cull::{Cull, CullCounts};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
 pub use integrate::Integrate;
 pub use ranges::Ranges;
@@ -94,6 +96,7 @@ struct Passes {
     composite: Composite,
     raymarch: Raymarch,
     ranges: Ranges,
+    cull: Cull,
 }
 
 impl Passes {
@@ -110,6 +113,7 @@ impl Passes {
                 composite: Composite::new(d, lib)?,
                 raymarch: Raymarch::new(d, lib)?,
                 ranges: Ranges::new(d, lib)?,
+                cull: Cull::new(d, lib)?,
             })
         })?
     }
@@ -222,6 +226,13 @@ impl Renderer {
         Ok(Some((v[1], v[2])).filter(|(lo, hi)| hi > lo))
     }
 
+    /// What the last frame's Cull pass kept and dropped. Blocks on a 16-byte readback.
+    pub fn cull_counts(&self) -> Result<CullCounts, GpuError> {
+        let bytes = self.ctx.read_buffer(&self.passes.cull.counters)?;
+        let v: &[u32] = bytemuck::cast_slice(&bytes);
+        Ok(CullCounts { kept: v[0], culled_depth: v[1], culled_view: v[2] })
+    }
+
     /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
     pub fn hdr_texture(&self) -> Option<&wgpu::Texture> {
         self.targets.as_ref().map(|t| &t.hdr)
@@ -327,10 +338,30 @@ impl Renderer {
             &self.passes.surface.layout,
             &[frame.clone(), self.shadow_uniforms.as_entire_binding(), R::TextureView(&self.passes.shadow_map.map_view)],
         );
+        let cull = &self.passes.cull;
+        let cull_bg = bind(
+            "Cull::bind_group",
+            &cull.layout,
+            &[
+                frame.clone(),
+                geometry.triangles.as_entire_binding(),
+                geometry.kept.as_entire_binding(),
+                geometry.kept_rects.as_entire_binding(),
+                cull.counters.as_entire_binding(),
+                cull.draw_args.as_entire_binding(),
+                cull.scan_args.as_entire_binding(),
+            ],
+        );
         let voxelize_bg = bind(
             "Voxelize::bind_group",
             &self.passes.voxelize.layout,
-            &[frame.clone(), geometry.triangles.as_entire_binding(), g.bits.as_entire_binding()],
+            &[
+                frame.clone(),
+                geometry.triangles.as_entire_binding(),
+                g.bits.as_entire_binding(),
+                geometry.kept.as_entire_binding(),
+                geometry.kept_rects.as_entire_binding(),
+            ],
         );
         let scan_bg = bind("Scan::bind_group", &self.passes.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
         let table_bg =
@@ -398,13 +429,15 @@ impl Renderer {
                 self.passes.ranges.record(&mut enc, &ranges_bg, &self.frame_buffer, width, height);
                 mark(&mut enc, "ranges");
             }
+            self.passes.cull.record(&mut enc, &cull_bg, geometry.triangle_count);
+            mark(&mut enc, "cull");
             enc.clear_buffer(&g.bits, 0, None);
-            self.passes.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, geometry.triangle_count);
+            self.passes.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, &self.passes.cull.draw_args);
             mark(&mut enc, "voxelize");
             if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                 enc.copy_buffer_to_buffer(&g.bits, 0, copy, 0, g.bits.size());
             }
-            self.passes.scan.record(&mut enc, &scan_bg, &scene.grid);
+            self.passes.scan.record(&mut enc, &scan_bg, &self.passes.cull.scan_args);
             mark(&mut enc, "scan");
             if scene.light.is_point() && method == Method::Vsv {
                 self.passes.scatter_table.record(&mut enc, &table_bg);

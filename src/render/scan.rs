@@ -3,7 +3,6 @@
 
 use super::util::{compute_pipeline, storage_entry, uniform_entry};
 use crate::gpu::{GpuError, ShaderLibrary};
-use crate::params::Grid;
 
 pub struct Scan {
     pipeline: wgpu::ComputePipeline,
@@ -24,10 +23,11 @@ impl Scan {
         Ok(Scan { pipeline, layout })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, grid: &Grid) {
+    /// `args`: the Cull pass's DispatchIndirect arguments (no workgroups when nothing was kept).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, args: &wgpu::Buffer) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups((grid.planes * grid.words()).div_ceil(64), 1, 1);
+        pass.dispatch_workgroups_indirect(args, 0);
     }
 }

@@ -12,6 +12,9 @@ pub struct SceneGpu {
     /// Three `vec4<f32>` world vertices per triangle, for vertex pulling in the voxelizer.
     pub triangles: wgpu::Buffer,
     pub triangle_count: u32,
+    /// The Cull pass's output: kept triangle indices and two rectangles each.
+    pub kept: wgpu::Buffer,
+    pub kept_rects: wgpu::Buffer,
 }
 
 impl SceneGpu {
@@ -54,6 +57,23 @@ impl SceneGpu {
             contents: bytemuck::cast_slice(&tris),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        SceneGpu { vertices: vb, indices: ib, index_count, triangles: tb, triangle_count: index_count / 3 }
+        let n = (index_count as u64 / 3).max(1);
+        let storage = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        SceneGpu {
+            vertices: vb,
+            indices: ib,
+            index_count,
+            triangles: tb,
+            triangle_count: index_count / 3,
+            kept: storage("SceneGpu::kept", n * 4),
+            kept_rects: storage("SceneGpu::kept_rects", n * 32),
+        }
     }
 }

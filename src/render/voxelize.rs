@@ -1,6 +1,7 @@
 //! Voxelize: the geometry bits of the epipolar grid (`shaders/voxelize.wgsl`).
 //!
-//! Each triangle is drawn as its bounding rectangle in (plane, ray) texels; each fragment clips the
+//! Each triangle the Cull pass kept is drawn as its bounding rectangles in (plane, ray) texels (an
+//! indirect draw); each fragment clips the
 //! triangle to its texel's cell (the pyramid of four view rays from the eye) and sets the bits of
 //! the z bins the clipped polygon spans: `grid[x, y, k] |= 1` for `k` in `[bin(z_min), bin(z_max)]`.
 //! A render pass needs one attachment on Mesa 22, so a write-masked R8 target of the grid's size
@@ -27,6 +28,8 @@ impl Voxelize {
                 uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
                 storage_entry(1, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 storage_entry(2, wgpu::ShaderStages::FRAGMENT, false),
+                storage_entry(3, wgpu::ShaderStages::VERTEX, true),
+                storage_entry(4, wgpu::ShaderStages::VERTEX, true),
             ],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -72,7 +75,7 @@ impl Voxelize {
         encoder: &mut wgpu::CommandEncoder,
         bind_group: &wgpu::BindGroup,
         dummy: &wgpu::TextureView,
-        triangles: u32,
+        draw_args: &wgpu::Buffer,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("Voxelize::pass"),
@@ -89,6 +92,7 @@ impl Voxelize {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
-        pass.draw(0..triangles * Self::VERTICES_PER_TRIANGLE, 0..1);
+        // The Cull pass wrote the vertex count: 12 per kept triangle.
+        pass.draw_indirect(draw_args, 0);
     }
 }

@@ -1,0 +1,225 @@
+// triangle_bounds.wgsl: where a triangle lies in the grid, shared by the Cull and Voxelize passes.
+//
+// The importing file declares `f: Frame` and `tris: array<vec4f>` (three world vertices per
+// triangle). gamma and psi over a segment are extremal at its ends or at one stationary point
+// (closed form below); over a triangle, on its edges unless the axis pierces it.
+
+// Angle at `origin` between direction c (unit) and the points of segment [p, q]: min and max,
+// from the end points and the one stationary point of the segment.
+fn segment_angle_range(origin: vec3f, c: vec3f, p: vec3f, q: vec3f) -> vec2f {
+    let u = p - origin;
+    let w = q - p;
+    let a0 = angle_between(c, u);
+    let a1 = angle_between(c, u + w);
+    var r = vec2f(min(a0, a1), max(a0, a1));
+    let uc = dot(u, c);
+    let wc = dot(w, c);
+    let uw = dot(u, w);
+    let den = wc * uw - uc * dot(w, w);
+    if (abs(den) > 1e-30) {
+        let s = (uc * uw - wc * dot(u, u)) / den;
+        if (s > 0.0 && s < 1.0) {
+            let a = angle_between(c, u + s * w);
+            r = vec2f(min(r.x, a), max(r.y, a));
+        }
+    }
+    return r;
+}
+
+// Distance of the points of segment [p, q] from the axis line through the eye: min and max.
+fn segment_axis_distance_range(p: vec3f, q: vec3f) -> vec2f {
+    let a = f.axis.xyz;
+    let u = p - f.eye.xyz;
+    let w = q - p;
+    let up = u - dot(u, a) * a;
+    let wp = w - dot(w, a) * a;
+    let d0 = length(up);
+    let d1 = length(up + wp);
+    var r = vec2f(min(d0, d1), max(d0, d1));
+    let ww = dot(wp, wp);
+    if (ww > 1e-30) {
+        let s = -dot(up, wp) / ww;
+        if (s > 0.0 && s < 1.0) {
+            r.x = min(r.x, length(up + s * wp));
+        }
+    }
+    return r;
+}
+
+// Where the line origin + s * d crosses the triangle: (1, s) on a hit, (0, 0) otherwise. A small
+// tolerance: a line through an edge or vertex counts as a hit (both triangles of a quad pierced
+// through its diagonal), which only makes ranges larger.
+fn line_hit(origin: vec3f, d: vec3f, p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if (abs(det) < 1e-20) { return vec2f(0.0, 0.0); }
+    let tv = origin - p0;
+    let u = dot(tv, pv) / det;
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) / det;
+    let eps = 1e-4;
+    if (u < -eps || v < -eps || u + v > 1.0 + eps) { return vec2f(0.0, 0.0); }
+    return vec2f(1.0, dot(e2, qv) / det);
+}
+
+// Where the eye-light axis crosses the triangle.
+fn axis_hit(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
+    return line_hit(f.eye.xyz, f.axis.xyz, p0, p1, p2);
+}
+
+// ---- a triangle's bounding rectangle in grid texels -------------------------------------------
+
+// Cartesian: the rectangle (x0, y0, x1, y1) of the triangle's screen projection; empty (x0 >= x1)
+// when it is culled. A triangle crossing the eye's plane covers the whole screen (conservative).
+fn cartesian_rect(p0: vec3f, p1: vec3f, p2: vec3f) -> vec4f {
+    let e = f.eye.xyz;
+    let fw = f.cam_fwd.xyz;
+    let z = vec3f(dot(p0 - e, fw), dot(p1 - e, fw), dot(p2 - e, fw));
+    let planes = f32(f.grid.x);
+    let rays = f32(f.grid.y);
+    if (all(z <= vec3f(0.0))) { return vec4f(0.0); }
+    var lo = vec2f(0.0, 0.0);
+    var hi = vec2f(planes, rays);
+    if (all(z > vec3f(0.0))) {
+        let c0 = grid_coords(f, normalize(p0 - e));
+        let c1 = grid_coords(f, normalize(p1 - e));
+        let c2 = grid_coords(f, normalize(p2 - e));
+        lo = floor(min(c0, min(c1, c2)));
+        hi = ceil(max(c0, max(c1, c2)));
+    }
+    // Casters beyond the screen edge on the light's side are clamped into ray 0.
+    if (lo.y >= rays || lo.x >= planes || hi.x <= 0.0) { return vec4f(0.0); }
+    lo = vec2f(max(lo.x, 0.0), clamp(lo.y, 0.0, rays - 1.0));
+    hi = vec2f(min(hi.x, planes), clamp(hi.y, lo.y + 1.0, rays));
+    return vec4f(lo, hi);
+}
+
+// The triangle's bounding rectangles in grid texels (x0, y0, x1, y1); an empty one has x0 >= x1.
+// The second holds the part past the seam at phi = 0.
+struct Rects {
+    a: vec4f,
+    b: vec4f,
+}
+
+fn triangle_rects(tri: u32) -> Rects {
+    var o = Rects(vec4f(0.0), vec4f(0.0));
+    let p0 = tris[3u * tri].xyz;
+    let p1 = tris[3u * tri + 1u].xyz;
+    let p2 = tris[3u * tri + 2u].xyz;
+    let e = f.eye.xyz;
+    let a = f.axis.xyz;
+    if (is_cartesian(f)) {
+        o.a = cartesian_rect(p0, p1, p2);
+        return o;
+    }
+
+    // gamma range: edges, plus the axis piercing the triangle.
+    var g = segment_angle_range(e, a, p0, p1);
+    let g12 = segment_angle_range(e, a, p1, p2);
+    let g20 = segment_angle_range(e, a, p2, p0);
+    g = vec2f(min(g.x, min(g12.x, g20.x)), max(g.y, max(g12.y, g20.y)));
+    let hit = axis_hit(p0, p1, p2);
+    var full_phi = false;
+    if (hit.x > 0.5) {
+        full_phi = true;
+        if (hit.y > 0.0) { g.x = 0.0; } else { g.y = PI; }
+    }
+
+    // Rows: clamp casters before the first visible ray into row 0; cull those after the last.
+    let rays = f32(f.grid.y);
+    var y0 = floor(ray_coord(f, g.x));
+    var y1 = ceil(ray_coord(f, g.y));
+    if (y0 >= rays) { return o; } // past the last visible ray: no visible point behind it
+    y0 = clamp(y0, 0.0, rays - 1.0);
+    y1 = clamp(y1, y0 + 1.0, rays);
+
+    // Planes: the smallest arc holding the three vertex angles (the triangle subtends < pi around
+    // the axis unless the axis pierces it).
+    let planes = f32(f.grid.x);
+    var x0 = 0.0;
+    var x1 = planes;
+    var second = false; // a second rectangle for the part past the seam
+    var sx0 = 0.0;
+    var sx1 = 0.0;
+    if (!full_phi) {
+        // (the arc test below assumes the triangle subtends less than pi around the axis)
+        var ph = array<f32, 3>(phi_of_dir(f, p0 - e), phi_of_dir(f, p1 - e), phi_of_dir(f, p2 - e));
+        // sort
+        if (ph[0] > ph[1]) { let t = ph[0]; ph[0] = ph[1]; ph[1] = t; }
+        if (ph[1] > ph[2]) { let t = ph[1]; ph[1] = ph[2]; ph[2] = t; }
+        if (ph[0] > ph[1]) { let t = ph[0]; ph[0] = ph[1]; ph[1] = t; }
+        let gaps = vec3f(ph[1] - ph[0], ph[2] - ph[1], TAU - ph[2] + ph[0]);
+        var start = ph[1];
+        var len = TAU - gaps.x;
+        if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph[2]; len = TAU - gaps.y; }
+        if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph[0]; len = TAU - gaps.z; }
+        if (len > PI - 1e-3) { full_phi = true; }
+        let span = f.b2.w;
+        // Arc relative to the first plane, in plane units.
+        var u0 = start - f.b1.w;
+        u0 = u0 - floor(u0 / TAU) * TAU;
+        let scale = planes / span;
+        if ((f.image.w & FLAG_PHI_WRAPS) != 0u) {
+            x0 = floor(u0 * scale);
+            x1 = ceil((u0 + len) * scale);
+            if (x1 > planes) {
+                second = true;
+                sx0 = 0.0;
+                sx1 = x1 - planes;
+                x1 = planes;
+            }
+        } else {
+            var lo = u0;
+            var hi = u0 + len;
+            if (hi > TAU) { lo -= TAU; hi -= TAU; } // the arc crosses the wedge's start
+            if (lo > span || hi < 0.0) { return o; } // outside the visible wedge
+            x0 = floor(clamp(lo, 0.0, span) * scale);
+            x1 = max(ceil(clamp(hi, 0.0, span) * scale), x0 + 1.0);
+            x1 = min(x1, planes);
+        }
+    }
+    if (full_phi) {
+        x0 = 0.0;
+        x1 = planes;
+        second = false;
+    }
+    o.a = vec4f(x0, y0, x1, y1);
+    if (second) { o.b = vec4f(sx0, y0, sx1, y1); }
+    return o;
+}
+
+// z range (psi, r or view depth) a triangle occupies: its edges' extremes, plus 0 (or pi) where
+// the light's axis pierces it.
+fn triangle_z_range(tri: u32) -> vec2f {
+    let p0 = tris[3u * tri].xyz;
+    let p1 = tris[3u * tri + 1u].xyz;
+    let p2 = tris[3u * tri + 2u].xyz;
+    let e = f.eye.xyz;
+    if (is_cartesian(f)) {
+        let fw = f.cam_fwd.xyz;
+        let z = vec3f(dot(p0 - e, fw), dot(p1 - e, fw), dot(p2 - e, fw));
+        return vec2f(min(z.x, min(z.y, z.z)), max(z.x, max(z.y, z.z)));
+    }
+    if (is_point_light(f)) {
+        let l = f.light.xyz;
+        let c = normalize(e - l);
+        let r0 = segment_angle_range(l, c, p0, p1);
+        let r1 = segment_angle_range(l, c, p1, p2);
+        let r2 = segment_angle_range(l, c, p2, p0);
+        var r = vec2f(min(r0.x, min(r1.x, r2.x)), max(r0.y, max(r1.y, r2.y)));
+        let hit = line_hit(l, c, p0, p1, p2);
+        if (hit.x > 0.5) {
+            if (hit.y > 0.0) { r.x = 0.0; } else { r.y = PI; }
+        }
+        return r;
+    }
+    let r0 = segment_axis_distance_range(p0, p1);
+    let r1 = segment_axis_distance_range(p1, p2);
+    let r2 = segment_axis_distance_range(p2, p0);
+    var r = vec2f(min(r0.x, min(r1.x, r2.x)), max(r0.y, max(r1.y, r2.y)));
+    if (axis_hit(p0, p1, p2).x > 0.5) { r.x = 0.0; }
+    return r;
+}
+
