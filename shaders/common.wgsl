@@ -13,6 +13,7 @@ const FLAG_POINT: u32 = 1u;        // point light (else directional)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_COSINE_BINS: u32 = 4u;  // bins uniform in cos(psi) (else uniform in psi / r)
 const FLAG_CARTESIAN: u32 = 8u;    // screen-space Cartesian grid (the paper's section 2)
+const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
 
 struct Frame {
     // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.

@@ -158,6 +158,10 @@ fn ray_base(x: u32, y: u32) -> u32 {
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
+    if ((f.image.w & FLAG_NO_SCATTER) != 0u) {
+        textureStore(scatter_out, vec2i(id.xy), vec4f(0.0, 0.0, 0.0, 1.0));
+        return;
+    }
     let v = pixel_dir(f, vec2f(id.xy));
     let a = f.axis.xyz;
     let gamma = angle_between(a, v);

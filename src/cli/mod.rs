@@ -244,7 +244,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             }
             renderer.prune = !args.no_prune;
             let o = renderer.render(&scene, w, h, method)?;
-            pruned_z = renderer.pruned_z_range()?;
+            pruned_z = Some(renderer.prune_report(&o.info())?);
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())
         }
     };
@@ -283,8 +283,10 @@ pub fn render(args: RenderArgs) -> Result<()> {
             let m = &o.setup.mapping;
             j["ranges"] = serde_json::json!({
                 "phi0": m.phi0, "phi_span": m.phi_span, "gamma": [m.gamma_lo, m.gamma_hi], "z": [m.z_lo, m.z_hi],
-                "z_fitted_to_visible_depth": pruned_z.map(|(lo, hi)| [lo, hi]),
             });
+        }
+        if let Some(p) = &pruned_z {
+            j["pruning"] = serde_json::to_value(p)?;
         }
         if args.method == Method::Raymarch {
             j["steps"] = serde_json::json!(args.steps);
@@ -312,6 +314,26 @@ pub fn render(args: RenderArgs) -> Result<()> {
                     println!("  {:<14} {:>9.3} ms", t.pass, t.ms);
                 }
                 println!("  {:<14} {:>9.3} ms", "total", total_ms);
+            }
+            if let Some(p) = &pruned_z {
+                println!(
+                    "work kept{}: planes over {:.1} of 360 deg, rays gamma {:.1}..{:.1} deg, bins z {:.4}..{:.4} (casters {:.4}..{:.4}), \
+                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth), passes: {}",
+                    if p.enabled { "" } else { " (--no-prune)" },
+                    p.planes_span_deg,
+                    p.rays_gamma_deg[0],
+                    p.rays_gamma_deg[1],
+                    p.bins_z[0],
+                    p.bins_z[1],
+                    p.bins_z_casters[0],
+                    p.bins_z_casters[1],
+                    p.words_per_ray,
+                    p.triangles.kept,
+                    p.triangles_total,
+                    p.triangles.culled_view,
+                    p.triangles.culled_depth,
+                    p.passes.join(" > ")
+                );
             }
         }
     }

@@ -10,6 +10,8 @@ pub const FLAG_POINT: u32 = 1;
 pub const FLAG_PHI_WRAPS: u32 = 2;
 pub const FLAG_COSINE_BINS: u32 = 4;
 pub const FLAG_CARTESIAN: u32 = 8;
+/// Nothing scatters (no medium or a dark light): Integrate writes zeros and the voxel passes are skipped.
+pub const FLAG_NO_SCATTER: u32 = 16;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
 #[repr(C)]
@@ -84,11 +86,24 @@ pub const TABLE_COLS: u32 = 512;
 
 impl FrameSetup {
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {
+        Self::with_pruning(scene, width, height, method, true)
+    }
+
+    /// With `prune == false` (`--no-prune`) the planes cover the full circle and the rays the full
+    /// half-turn of gamma, whatever the frame sees (the bins keep the casters' range).
+    pub fn with_pruning(scene: &Scene, width: u32, height: u32, method: Method, prune: bool) -> Result<FrameSetup, FrameError> {
         let cam = &scene.camera;
         let aspect = width as f64 / height as f64;
         let frame = EpipolarFrame::new(cam.eye.as_dvec3(), LightGeom::from(&scene.light)).ok_or(FrameError::EyeOnLight)?;
         let bounds: Aabb = scene.bounds();
         let mut mapping = GridMapping::fit(&frame, cam, aspect, &bounds, scene.grid);
+        if !prune {
+            mapping.phi0 = 0.0;
+            mapping.phi_span = std::f64::consts::TAU;
+            mapping.phi_wraps = true;
+            mapping.gamma_lo = 0.0;
+            mapping.gamma_hi = std::f64::consts::PI;
+        }
         let [r, u, f] = cam.basis_f64();
         let mut cartesian_axis = 0u32;
         if method == Method::Cartesian {
@@ -142,6 +157,9 @@ impl FrameSetup {
         }
         if method == Method::Cartesian {
             flags |= FLAG_CARTESIAN;
+        }
+        if !scene.needs_scattering() {
+            flags |= FLAG_NO_SCATTER;
         }
         let mb = scene.medium_bounds();
         let m = &scene.medium;

@@ -50,6 +50,8 @@ pub struct RenderOutput {
     pub timings: Vec<PassTiming>,
     /// The frame's fitted grid ranges.
     pub setup: FrameSetup,
+    /// The passes that ran, in order.
+    pub passes: Vec<&'static str>,
 }
 
 /// What one frame produced on the GPU side (timings and the fitted grid), without images.
@@ -57,9 +59,37 @@ pub struct RenderOutput {
 pub struct FrameInfo {
     pub timings: Vec<PassTiming>,
     pub setup: FrameSetup,
+    /// The passes that ran, in order (also without timestamps).
+    pub passes: Vec<&'static str>,
+}
+
+/// What fitting the work to the frame kept (DESIGN section 6), for `--json` and the Stats panel.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PruneReport {
+    pub enabled: bool,
+    /// Angular span of the planes around the eye-light axis, of 360 degrees.
+    pub planes_span_deg: f64,
+    /// gamma range of the rays, within [0, 180] degrees.
+    pub rays_gamma_deg: [f64; 2],
+    /// z range of the bins (psi in degrees for a point light, distance otherwise), after fitting
+    /// to the visible depth, and the casters' range it was cut from.
+    pub bins_z: [f64; 2],
+    pub bins_z_casters: [f64; 2],
+    /// 32-bit words per ray (the bins' precision is spent on `bins_z`).
+    pub words_per_ray: u32,
+    pub triangles_total: u32,
+    /// Kept and dropped triangles (zero when no voxel pass ran).
+    pub triangles: CullCounts,
+    /// The passes that ran.
+    pub passes: Vec<&'static str>,
 }
 
 impl RenderOutput {
+    /// The frame's description without the images.
+    pub fn info(&self) -> FrameInfo {
+        FrameInfo { timings: self.timings.clone(), setup: self.setup, passes: self.passes.clone() }
+    }
+
     pub fn total_ms(&self) -> f64 {
         self.timings.iter().map(|t| t.ms).sum()
     }
@@ -226,6 +256,27 @@ impl Renderer {
         Ok(Some((v[1], v[2])).filter(|(lo, hi)| hi > lo))
     }
 
+    /// What pruning kept of the frame `info` describes (the last one). Blocks on two tiny readbacks.
+    pub fn prune_report(&self, info: &FrameInfo) -> Result<PruneReport, GpuError> {
+        let m = &info.setup.mapping;
+        let point = info.setup.frame.is_point() && info.setup.method != Method::Cartesian;
+        let z = |v: f64| if point { v.to_degrees() } else { v };
+        let voxels_ran = info.passes.contains(&"voxelize");
+        let fitted = if voxels_ran { self.pruned_z_range()? } else { None };
+        let bins = fitted.map(|(lo, hi)| [z(lo as f64), z(hi as f64)]).unwrap_or([z(m.z_lo), z(m.z_hi)]);
+        Ok(PruneReport {
+            enabled: self.prune,
+            planes_span_deg: m.phi_span.to_degrees(),
+            rays_gamma_deg: [m.gamma_lo.to_degrees(), m.gamma_hi.to_degrees()],
+            bins_z: bins,
+            bins_z_casters: [z(m.z_lo), z(m.z_hi)],
+            words_per_ray: m.grid.words(),
+            triangles_total: self.geometry.as_ref().map_or(0, |(g, _)| g.triangle_count),
+            triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
+            passes: info.passes.clone(),
+        })
+    }
+
     /// What the last frame's Cull pass kept and dropped. Blocks on a 16-byte readback.
     pub fn cull_counts(&self) -> Result<CullCounts, GpuError> {
         let bytes = self.ctx.read_buffer(&self.passes.cull.counters)?;
@@ -310,7 +361,7 @@ impl Renderer {
                 mapped_at_creation: false,
             }));
         }
-        let setup = FrameSetup::new(scene, width, height, method)?;
+        let setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
         let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("ensured above")
         };
@@ -411,7 +462,9 @@ impl Renderer {
         if let Some(tm) = timer.as_mut() {
             tm.begin(&mut enc);
         }
+        let mut ran: Vec<&'static str> = Vec::new();
         let mut mark = |enc: &mut wgpu::CommandEncoder, pass: &'static str| {
+            ran.push(pass);
             if let Some(tm) = timer.as_mut() {
                 tm.mark(enc, pass);
             }
@@ -424,6 +477,11 @@ impl Renderer {
         if let Method::Raymarch { steps, jitter } = method {
             self.passes.raymarch.record(&ctx.queue, &mut enc, &raymarch_bg, width, height, steps, jitter);
             mark(&mut enc, "raymarch");
+        } else if !scene.needs_scattering() {
+            // Nothing scatters: no voxel pass has anything to compute; Integrate writes zeros.
+            enc.clear_buffer(&g.bits, 0, None);
+            self.passes.integrate.record(&mut enc, &integrate_bg, width, height);
+            mark(&mut enc, "integrate");
         } else {
             if self.prune {
                 self.passes.ranges.record(&mut enc, &ranges_bg, &self.frame_buffer, width, height);
@@ -458,12 +516,12 @@ impl Renderer {
         };
         self.timer = timer;
 
-        Ok(FrameInfo { timings, setup })
+        Ok(FrameInfo { timings, setup, passes: ran })
     }
 
     /// Renders one frame and reads the final and the scattered image back to the CPU.
     pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
-        let FrameInfo { timings, setup } = self.render_frame(scene, width, height, method)?;
+        let FrameInfo { timings, setup, passes } = self.render_frame(scene, width, height, method)?;
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
             let mut img = Image::new(width, height);
@@ -474,7 +532,7 @@ impl Renderer {
         };
         let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
         let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
-        Ok(RenderOutput { hdr, scatter, timings, setup })
+        Ok(RenderOutput { hdr, scatter, timings, setup, passes })
     }
 
     /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the

@@ -202,6 +202,11 @@ impl Scene {
         self.meshes.iter().fold(Aabb::EMPTY, |b, m| b.union(&m.bounds()))
     }
 
+    /// False when the frame has no in-scattering to compute: a clear medium or a dark light.
+    pub fn needs_scattering(&self) -> bool {
+        !self.medium.is_clear() && self.light.power().max_element() > 0.0
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
