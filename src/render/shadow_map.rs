@@ -155,11 +155,17 @@ impl ShadowMap {
                 count = 6;
             }
             Light::Directional { direction, .. } => {
+                // Across the light, cover the scene without its backdrops (texel density); along it,
+                // the whole scene (every caster on the light's side counts).
+                let core = scene.core_bounds();
+                let (cc, cr) = (core.center(), core.radius().max(1e-6));
                 let w = direction.normalize_or(Vec3::Y);
-                let origin = c + w * (2.0 * r);
+                let origin = cc + w * ((c - cc).dot(w) + 2.0 * r);
                 let up = if w.y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
                 let view = glam::camera::rh::view::look_to_mat4(origin, -w, up);
-                let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.0, 4.0 * r);
+                let depth = (origin - c).dot(w) + 2.0 * r;
+                let proj = glam::camera::rh::proj::directx::orthographic(-cr, cr, -cr, cr, 0.0, depth);
+                let r = cr;
                 faces[0] = FaceUniforms { view_proj: proj * view, light: w.extend(0.0), origin: origin.extend(1.0) };
                 texel = 2.0 * r / self.size as f32;
                 count = 1;

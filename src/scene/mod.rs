@@ -211,6 +211,34 @@ impl Scene {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
 
+    /// The bounds without "backdrops": meshes of at most 16 triangles whose extent is over 4 times
+    /// that of everything else together (the classroom's 221 m ground quad). The directional
+    /// shadow map covers these bounds, so a backdrop does not spread its texels over hundreds of
+    /// metres; backdrops themselves are not needed as casters there (they lie under everything).
+    pub fn core_bounds(&self) -> Aabb {
+        let mut core = Aabb::EMPTY;
+        for (i, m) in self.meshes.iter().enumerate() {
+            let b = m.bounds();
+            if m.triangles.len() <= 16 {
+                let others = self
+                    .meshes
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .fold(Aabb::EMPTY, |acc, (_, o)| acc.union(&o.bounds()));
+                if !others.is_empty() && b.extent().max_element() > 4.0 * others.extent().max_element() {
+                    continue;
+                }
+            }
+            core = core.union(&b);
+        }
+        if core.is_empty() {
+            self.bounds()
+        } else {
+            core
+        }
+    }
+
     /// The box the medium fills for a directional light: the scene's bounds grown by 1% so that
     /// surfaces on the boundary are inside. (A point light's medium is unbounded; see DESIGN 1.)
     pub fn medium_bounds(&self) -> Aabb {
