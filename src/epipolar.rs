@@ -72,7 +72,7 @@ impl EpipolarFrame {
         let (axis, dist) = match light {
             LightGeom::Point(l) => {
                 let d = (l - eye).length();
-                if !(d > 0.0) || !d.is_finite() {
+                if d.is_nan() || d <= 0.0 || !d.is_finite() {
                     return None;
                 }
                 ((l - eye) / d, d)

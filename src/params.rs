@@ -394,7 +394,7 @@ impl Grid {
         Self::PLANES.check(self.planes as f64)?;
         Self::RAYS.check(self.rays as f64)?;
         Self::BINS.check(self.bins as f64)?;
-        if self.bins % 32 != 0 {
+        if !self.bins.is_multiple_of(32) {
             return Err(ParamError::Invalid(format!(
                 "bins = {} must be a multiple of 32",
                 self.bins
