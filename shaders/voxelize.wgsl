@@ -87,20 +87,48 @@ fn fs_main(i: VsOut) -> @location(0) vec4f {
     let e = f.eye.xyz;
     let x0 = f32(ix);
     let y0 = f32(iy);
-    let d00 = cell_dir(f, x0, y0);
-    let d10 = cell_dir(f, x0 + 1.0, y0);
-    let d11 = cell_dir(f, x0 + 1.0, y0 + 1.0);
-    let d01 = cell_dir(f, x0, y0 + 1.0);
-    let centre = cell_dir(f, x0 + 0.5, y0 + 0.5);
+    var faces: array<vec3f, 4>;
+    if (is_cartesian(f)) {
+        // Screen-space cells: planes through the eye and two adjacent corner rays.
+        let d00 = cell_dir(f, x0, y0);
+        let d10 = cell_dir(f, x0 + 1.0, y0);
+        let d11 = cell_dir(f, x0 + 1.0, y0 + 1.0);
+        let d01 = cell_dir(f, x0, y0 + 1.0);
+        let centre = cell_dir(f, x0 + 0.5, y0 + 0.5);
+        faces = array<vec3f, 4>(cross(d00, d10), cross(d10, d11), cross(d11, d01), cross(d01, d00));
+        for (var k = 0; k < 4; k++) {
+            if (dot(faces[k], centre) < 0.0) { faces[k] = -faces[k]; }
+        }
+    } else {
+        // Epipolar cells, faces in closed form (cross products of nearly parallel corner rays
+        // lose their sign near the axis, which dropped whole planes of row 0 at 1024 planes).
+        // With m, q the unit directions at phi_m and phi_m + 90 degrees around the axis a and
+        // delta the half-width in phi: the plane faces are -+(-sin phi b1 + cos phi b2), and the
+        // chord through the corner rays at gamma is normal to sin(gamma) cos(delta) a - cos(gamma) m.
+        let phi0 = phi_of_plane(f, x0);
+        let phi1 = phi_of_plane(f, x0 + 1.0);
+        let g0 = gamma_of_ray(f, y0);
+        let g1 = gamma_of_ray(f, y0 + 1.0);
+        let a = f.axis.xyz;
+        let b1 = f.b1.xyz;
+        let b2 = f.b2.xyz;
+        let pm = 0.5 * (phi0 + phi1);
+        let cd = cos(0.5 * (phi1 - phi0));
+        let m = b1 * cos(pm) + b2 * sin(pm);
+        faces[0] = cos(g0) * m - sin(g0) * cd * a;          // gamma > gamma_0
+        faces[1] = b1 * sin(phi1) - b2 * cos(phi1);         // phi < phi_1
+        faces[2] = sin(g1) * cd * a - cos(g1) * m;          // gamma < gamma_1
+        faces[3] = -b1 * sin(phi0) + b2 * cos(phi0);        // phi > phi_0
+    }
 
     count = 3u;
     poly[0] = tris[3u * i.tri].xyz - e;
     poly[1] = tris[3u * i.tri + 1u].xyz - e;
     poly[2] = tris[3u * i.tri + 2u].xyz - e;
-    var faces = array<vec3f, 4>(cross(d00, d10), cross(d10, d11), cross(d11, d01), cross(d01, d00));
+    // Ray 0 also holds the casters before the first visible ray (toward the light): its cell is
+    // open on that side.
     for (var k = select(0, 1, iy == 0u); k < 4; k++) {
-        var n = faces[k];
-        if (dot(n, centre) < 0.0) { n = -n; }
+        let n = faces[k];
         clip_plane(n);
         if (count < 3u) { return vec4f(0.0); }
     }

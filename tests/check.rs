@@ -122,7 +122,7 @@ fn every_case_states_its_bound_and_reason() {
 /// The command line: `--json` prints one object, an unknown case name is a clear error.
 #[test]
 fn check_command_json_and_bad_filter() {
-    if !common::renderer().is_some() {
+    if common::renderer().is_none() {
         return;
     }
     let exe = env!("CARGO_BIN_EXE_epivox");

@@ -13,6 +13,9 @@
 //! independent evaluations [`exact_point_run`] / [`exact_box_integral`] (rounding and
 //! discretisation), over random inputs including the extremes.
 
+// `!(b > a)` is deliberate: it treats NaN bounds as an empty range.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::image::Image;
 use crate::params::{Light, Phase};
 use crate::reference::{integrate, RaySample};
@@ -36,8 +39,8 @@ macro_rules! formulas {
         #[doc = $doc]
         pub mod $name {
             #![allow(clippy::excessive_precision)]
-            pub const PI: $F = 3.14159265358979;
-            const INV_4PI: $F = 0.0795774715459477;
+            pub const PI: $F = std::f64::consts::PI as $F;
+            const INV_4PI: $F = (0.25 / std::f64::consts::PI) as $F;
 
             /// `d = 1 + g^2 - 2 g c` written as a sum of non-negative terms: `(1 - g)^2 + 2 g (1 - c)`
             /// for `g >= 0`, `(1 + g)^2 - 2 g (1 + c)` for `g < 0` (`omc = 1 - c`, `opc = 1 + c`).
@@ -88,7 +91,10 @@ macro_rules! formulas {
             /// `one_minus_exp_over_x` of common.wgsl: `(1 - exp(-x)) / x`.
             pub fn one_minus_exp_over_x(x: $F) -> $F {
                 if x.abs() < 0.5 {
-                    1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))))
+                    1.0 - x
+                        * (0.5
+                            - x * (1.0 / 6.0
+                                - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))))
                 } else {
                     (1.0 - (-x).exp()) / x.max(1e-30)
                 }
@@ -97,7 +103,17 @@ macro_rules! formulas {
             /// `integrand` of scatter_table.wgsl for one channel: the unshadowed in-scattering per
             /// unit `psi` times `h`, with `exp(-sigma_t D)` factored out (it is applied by the
             /// integrate pass, combined with the log of the prefactor).
-            pub fn table_integrand(gamma: $F, psi: $F, h2: $F, dist: $F, sigma_t: $F, radius: $F, id: u32, g: $F) -> $F {
+            #[allow(clippy::too_many_arguments)]
+            pub fn table_integrand(
+                gamma: $F,
+                psi: $F,
+                h2: $F,
+                dist: $F,
+                sigma_t: $F,
+                radius: $F,
+                id: u32,
+                g: $F,
+            ) -> $F {
                 let s = (gamma + psi).sin();
                 // t + d - D = D (sin psi + sin gamma - sin(gamma + psi)) / sin(gamma + psi), written
                 // without cancellation.
@@ -165,7 +181,11 @@ macro_rules! formulas {
 
             fn safe(d: $F) -> $F {
                 if d.abs() < 1e-20 {
-                    if d < 0.0 { -1e-20 } else { 1e-20 }
+                    if d < 0.0 {
+                        -1e-20
+                    } else {
+                        1e-20
+                    }
                 } else {
                     d
                 }
@@ -175,7 +195,17 @@ macro_rules! formulas {
             /// t_in)) dt` along `e + t v`, with `l` the distance toward the light `w` to the box
             /// `[lo, hi]`.
             #[allow(clippy::too_many_arguments)]
-            pub fn box_integral(e: [$F; 3], v: [$F; 3], w: [$F; 3], lo: [$F; 3], hi: [$F; 3], sigma_t: $F, t_in: $F, a: $F, b: $F) -> $F {
+            pub fn box_integral(
+                e: [$F; 3],
+                v: [$F; 3],
+                w: [$F; 3],
+                lo: [$F; 3],
+                hi: [$F; 3],
+                sigma_t: $F,
+                t_in: $F,
+                a: $F,
+                b: $F,
+            ) -> $F {
                 if b <= a {
                     return 0.0;
                 }
@@ -239,7 +269,16 @@ formulas!(f64m, f64, "The same formulas in `f64`: the difference to [`f32m`] is 
 /// adaptive Gauss-Kronrod in `f64` over `psi` of `p(cos theta) exp(-sigma_t (t + d - D)) / (d^2 +
 /// r^2) dt/dpsi` with `t`, `d` from the law of sines and [`Phase::eval`].
 #[allow(clippy::too_many_arguments)]
-pub fn exact_point_run(gamma: f64, psi_a: f64, psi_b: f64, dist: f64, sigma_t: f64, radius: f64, phase: Phase, tol: f64) -> f64 {
+pub fn exact_point_run(
+    gamma: f64,
+    psi_a: f64,
+    psi_b: f64,
+    dist: f64,
+    sigma_t: f64,
+    radius: f64,
+    phase: Phase,
+    tol: f64,
+) -> f64 {
     if !(psi_b > psi_a) {
         return 0.0;
     }
@@ -277,7 +316,18 @@ pub fn exact_point_run(gamma: f64, psi_a: f64, psi_b: f64, dist: f64, sigma_t: f
 /// `integral_a^b exp(-sigma_t (l(t) + t - t_in)) dt` in `f64` by adaptive quadrature, with `l(t)`
 /// the exit distance from `e + t v` toward `w` through the box, found by a slab test per sample.
 #[allow(clippy::too_many_arguments)]
-pub fn exact_box_integral(e: DVec3, v: DVec3, w: DVec3, lo: DVec3, hi: DVec3, sigma_t: f64, t_in: f64, a: f64, b: f64, tol: f64) -> f64 {
+pub fn exact_box_integral(
+    e: DVec3,
+    v: DVec3,
+    w: DVec3,
+    lo: DVec3,
+    hi: DVec3,
+    sigma_t: f64,
+    t_in: f64,
+    a: f64,
+    b: f64,
+    tol: f64,
+) -> f64 {
     if !(b > a) {
         return 0.0;
     }
@@ -338,7 +388,13 @@ const CPU_PANELS: usize = 96;
 /// `separate_exponents` is the planted failure: the transmittance as the product
 /// `exp(-sigma_t d) * exp(-sigma_t t)`, multiplied into the prefactor afterwards. Otherwise the
 /// exponents and the log of the prefactor are combined before one `exp`, as the shaders do.
-pub fn cpu_f32_scatter(scene: &Scene, width: u32, height: u32, samples: &[RaySample], separate_exponents: bool) -> Result<Image, MirrorError> {
+pub fn cpu_f32_scatter(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    samples: &[RaySample],
+    separate_exponents: bool,
+) -> Result<Image, MirrorError> {
     let Light::Point { position, intensity, radius } = scene.light else {
         return Err(MirrorError::NotPointLight);
     };
@@ -361,7 +417,8 @@ pub fn cpu_f32_scatter(scene: &Scene, width: u32, height: u32, samples: &[RaySam
         let hh = (h * h + radius * radius).sqrt().max(1e-7 * wv.length());
         let mut sum = Vec3::ZERO;
         for &(ta, tb) in &s.lit {
-            let alpha = |t: f64| if t.is_infinite() { std::f32::consts::FRAC_PI_2 } else { ((t as f32) - tc).atan2(hh) };
+            let alpha =
+                |t: f64| if t.is_infinite() { std::f32::consts::FRAC_PI_2 } else { ((t as f32) - tc).atan2(hh) };
             let (a0, a1) = (alpha(ta), alpha(tb));
             if !(a1 > a0) {
                 continue;

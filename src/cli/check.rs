@@ -24,17 +24,34 @@ pub struct CheckArgs {
     /// Write each compared pair of images to this folder as text (x y reference rgb, method rgb).
     #[arg(long)]
     pub dump: Option<std::path::PathBuf>,
+    /// Run every case at this grid PLANESxRAYSxBINS instead of its own (a diagnostic: the bounds
+    /// were measured at the cases' own grids).
+    #[arg(long, value_parser = |s: &str| epivox::params::Grid::parse(s).map_err(|e| e.to_string()))]
+    pub grid: Option<epivox::params::Grid>,
 }
 
 pub fn check(args: CheckArgs) -> Result<()> {
     let ctx = GpuContext::headless().context("epivox check needs a GPU adapter (the software one will do)")?;
     let limits = ctx.device.limits();
-    let opts = CheckOptions { quick: args.quick, filter: args.only.clone(), dump: args.dump.clone(), ..CheckOptions::default() };
+    let opts = CheckOptions {
+        quick: args.quick,
+        filter: args.only.clone(),
+        dump: args.dump.clone(),
+        grid: args.grid,
+        ..CheckOptions::default()
+    };
     let cases = check::select(&limits, &opts)?;
     if args.list {
         for c in &cases {
             let runs: Vec<String> = c.runs.iter().map(|(m, e)| format!("{} {}", m.label(), e.describe())).collect();
-            println!("{}{}\n    {}\n    bound: {}\n    runs: {}", c.name, if c.quick { " (quick)" } else { "" }, c.about, c.reason, runs.join(", "));
+            println!(
+                "{}{}\n    {}\n    bound: {}\n    runs: {}",
+                c.name,
+                if c.quick { " (quick)" } else { "" },
+                c.about,
+                c.reason,
+                runs.join(", ")
+            );
         }
         return Ok(());
     }
