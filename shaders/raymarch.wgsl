@@ -92,14 +92,17 @@ fn pixel_hash(p: vec2u) -> f32 {
 }
 
 // Point light: sigma_s I0 p(cos theta) V exp(-sigma_t (d + t)) at distance t along v, without the
-// 1 / (d^2 + r^2) (the caller's measure carries it).
+// 1 / (d^2 + r^2) (the caller's measure carries it). sigma_s I0 goes into the exponent: in a thick
+// medium exp(-sigma_t (d + t)) alone underflows f32 although the product is representable.
 fn point_term(v: vec3f, t: f32) -> vec3f {
     let p = f.eye.xyz + t * v;
     let to_p = p - f.light.xyz;
     let d = length(to_p);
     let cos_theta = -dot(to_p, v) / max(d, 1e-30);
     let ph = phase(f.image.z, f.sigma_s.w, cos_theta);
-    return ph * lit(p) * exp(-f.sigma_t.xyz * (d + t));
+    let pre = f.sigma_s.xyz * f.light_power.xyz;
+    let e = select(exp(log(pre) - f.sigma_t.xyz * (d + t)), vec3f(0.0), pre <= vec3f(0.0));
+    return ph * lit(p) * e;
 }
 
 fn march_point(v: vec3f, t_s: f32, u: f32) -> vec3f {
@@ -135,7 +138,7 @@ fn march_point(v: vec3f, t_s: f32, u: f32) -> vec3f {
             sum += point_term(v, t) * (da / big_h);
         }
     }
-    return f.sigma_s.xyz * f.light_power.xyz * sum;
+    return sum;
 }
 
 fn march_directional(v: vec3f, t_s: f32, u: f32) -> vec3f {
