@@ -4,7 +4,8 @@
 # 1. Installs, only when missing, what the tests need: the Mesa software Vulkan driver
 #    (lavapipe, so the GPU tests run without a GPU), Xvfb (a virtual X display) and the DejaVu
 #    fonts (the benchmark plots' text).
-# 2. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset.
+# 2. Starts Xvfb (when DISPLAY is unset) for the editor window test.
+# 3. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset.
 #
 # Works from any directory; exits non-zero on the first failure.
 set -euo pipefail
@@ -62,8 +63,32 @@ else
     echo "    none found: GPU tests will have no Vulkan adapter"
 fi
 
-# ---------------------------------------------------------------- tests
+# ---------------------------------------------------------------- display for the editor test
+# tests/editor_window.rs opens the real editor window; give it a virtual X display when there is
+# none (the test skips, saying so, when DISPLAY stays unset).
 unset WAYLAND_DISPLAY
+if [[ -z "${DISPLAY:-}" ]] && command -v Xvfb >/dev/null 2>&1; then
+    display=":99"
+    # Another server may hold :99 already (a previous run): pick the first free number.
+    for n in 99 98 97 96 95; do
+        if [[ ! -e "/tmp/.X11-unix/X$n" && ! -e "/tmp/.X$n-lock" ]]; then
+            display=":$n"
+            break
+        fi
+    done
+    say "Starting Xvfb $display for the editor window test"
+    Xvfb "$display" -screen 0 1600x1000x24 -nolisten tcp >/dev/null 2>&1 &
+    xvfb_pid=$!
+    trap 'kill "$xvfb_pid" 2>/dev/null || true' EXIT
+    for _ in $(seq 50); do
+        [[ -e "/tmp/.X11-unix/X${display#:}" ]] && break
+        sleep 0.1
+    done
+    export DISPLAY="$display"
+fi
+echo "    DISPLAY=${DISPLAY:-unset}"
+
+# ---------------------------------------------------------------- tests
 
 if ! command -v cargo >/dev/null 2>&1; then
     echo "error: cargo not found; install Rust (https://rustup.rs) and run this again" >&2

@@ -72,6 +72,8 @@ fn lit(p: vec3f) -> f32 {
     let clip = shadow.view_proj[layer] * vec4f(p, 1.0);
     if (clip.w <= 0.0) { return 1.0; }
     let ndc = clip.xy / clip.w;
+    // Outside the map (which covers every caster but backdrops): lit, as in surface.wgsl.
+    if (any(abs(ndc) > vec2f(1.0))) { return 1.0; }
     let n = shadow.params.x;
     let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * n;
     let c = vec2i(clamp(floor(uv), vec2f(0.0), vec2f(n - 1.0)));

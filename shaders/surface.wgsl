@@ -68,6 +68,9 @@ fn visibility(p: vec3f, bias: f32) -> f32 {
     let clip = shadow.view_proj[layer] * vec4f(p, 1.0);
     if (clip.w <= 0.0) { return 1.0; }
     let ndc = clip.xy / clip.w;
+    // The map covers every caster but backdrops (Scene::core_bounds): a point projecting outside
+    // it can only be shadowed by a backdrop, which lies under everything: lit.
+    if (any(abs(ndc) > vec2f(1.0))) { return 1.0; }
     let n = shadow.params.x;
     let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * n - 0.5;
     let base = floor(uv);

@@ -15,9 +15,12 @@ use epivox::scene::{builtin_scene, Scene};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+/// Creates the editor on the harness's context.
+type MakeEditor = Box<dyn FnOnce(&egui::Context) -> Editor>;
+
 /// The app under test: the editor is created inside the first frame, on the harness's context.
 struct App {
-    make: Option<Box<dyn FnOnce(&egui::Context) -> Editor>>,
+    make: Option<MakeEditor>,
     editor: Option<Editor>,
 }
 
@@ -147,6 +150,7 @@ fn panels_exist_and_the_viewport_shows_the_scene() {
     assert!(h.state().ed().frames_rendered() <= 2, "re-rendered without a change");
     // The stats show GPU time per pass when the adapter has timestamps, and the grid memory.
     assert!(has_label_containing(&h, "grid memory"));
+    assert!(has_label_containing(&h, "triangles voxelized"), "no account of the work kept");
     assert!(h.state().ed().frame_report().is_some_and(|r| r.result.is_ok()));
 }
 
@@ -337,11 +341,21 @@ fn the_inspector_reads_the_grid_and_links_hover_both_ways() {
     // The grid is read back on the frame after a render.
     let _ = viewport_pixels(&mut h);
     assert!(has_label_containing(&h, "128 planes × 128 rays × 64 bins"), "no grid picture");
-    // Hover the middle of the viewport: the slice follows the plane under the pointer.
+    // Viewport -> inspector: the pixel under the pointer has a plane and a ray, and the slice
+    // follows its plane.
     let r = h.state().ed().viewport_rect().unwrap();
-    h.hover_at(r.center());
+    h.hover_at(r.center() + egui::vec2(-r.width() * 0.2, r.height() * 0.1));
     h.run();
-    let _ = viewport_pixels(&mut h);
+    let (x, y) = h.state().ed().viewport_cell().expect("no grid cell under the pointer");
+    assert!((0.0..128.0).contains(&x) && (0.0..128.0).contains(&y), "{x},{y}");
+    assert_eq!(h.state().ed().slice_plane(), x as u32, "the slice did not follow the pointer");
+    // Inspector -> viewport: hovering the grid picture names the cell under the pointer.
+    let g = h.state().ed().inspector_grid_rect().expect("no grid picture drawn");
+    h.hover_at(g.left_top() + g.size() * egui::vec2(0.25, 0.75));
+    h.run();
+    let (ix, iy) = h.state().ed().inspector_cell().expect("no cell under the pointer in the inspector");
+    assert!((ix - 32.0).abs() < 2.0 && (iy - 96.0).abs() < 2.0, "{ix},{iy}");
+    assert!(h.state().ed().viewport_cell().is_none());
     // Export the picture.
     let png = dir.path().join("grid.png");
     h.state_mut().ed_mut().apply(Command::ExportInspector(png.clone()));
@@ -352,4 +366,104 @@ fn the_inspector_reads_the_grid_and_links_hover_both_ways() {
     h.state_mut().ed_mut().apply(Command::Screenshot(shot.clone()));
     assert!(image::open(&shot).is_ok());
     assert!(h.state().ed().messages().iter().all(|m| !m.error), "{:?}", h.state().ed().messages());
+}
+
+/// Presses at `from`, moves to `to` in steps, releases.
+fn drag(h: &mut Harness<'static, App>, from: egui::Pos2, to: egui::Pos2) {
+    h.hover_at(from);
+    h.run();
+    h.drag_at(from);
+    h.run();
+    for i in 1..=4 {
+        h.hover_at(from + (to - from) * (i as f32 / 4.0));
+        h.run();
+    }
+    h.drop_at(to);
+    h.run();
+}
+
+#[test]
+fn dragging_orbits_the_camera_or_moves_the_light_and_each_drag_is_one_undo_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let _ = viewport_pixels(&mut h);
+    let r = h.state().ed().viewport_rect().unwrap();
+    let cam0 = h.state().ed().look().camera;
+    drag(&mut h, r.center(), r.center() + egui::vec2(80.0, 30.0));
+    let cam1 = h.state().ed().look().camera;
+    assert_ne!(cam0.eye, cam1.eye, "dragging did not orbit");
+    assert_eq!(cam0.target, cam1.target, "orbiting moved the target");
+    assert!(((cam1.eye - cam1.target).length() - (cam0.eye - cam0.target).length()).abs() < 1e-3);
+    h.state_mut().ed_mut().apply(Command::Undo);
+    assert_eq!(h.state().ed().look().camera, cam0, "one undo did not undo the whole drag");
+    // Put a point light in view, then drag its handle: the light moves, the camera does not.
+    let target = cam0.target;
+    let light = epivox::params::Light::Point { position: target + glam::Vec3::Y * 0.3, intensity: glam::Vec3::splat(5.0), radius: 0.0 };
+    h.state_mut().ed_mut().apply(Command::SetLight(light, None));
+    h.run();
+    let handle = h.state().ed().light_handle_pos().expect("the light is in view");
+    assert!(r.contains(handle));
+    drag(&mut h, handle, handle + egui::vec2(40.0, -20.0));
+    let moved = h.state().ed().look().light;
+    assert_eq!(h.state().ed().look().camera, cam0, "dragging the light moved the camera");
+    let epivox::params::Light::Point { position, .. } = moved else { panic!("{moved:?}") };
+    assert!(position.distance(target + glam::Vec3::Y * 0.3) > 1e-3, "the light did not move");
+    let after = h.state().ed().light_handle_pos().unwrap();
+    assert!((after - (handle + egui::vec2(40.0, -20.0))).length() < 3.0, "the light does not follow the pointer: {after:?}");
+    h.state_mut().ed_mut().apply(Command::Undo);
+    assert_eq!(h.state().ed().look().light, light.normalized());
+}
+
+#[test]
+fn the_accuracy_check_runs_in_the_background_and_can_be_cancelled() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let _ = viewport_pixels(&mut h);
+    h.state_mut().ed_mut().apply(Command::StartAccuracy { width: 32 });
+    assert!(h.state().ed().accuracy_running());
+    // Editing goes on meanwhile.
+    slider(&h, "density").set_value_accesskit(1.5);
+    h.run();
+    assert_eq!(h.state().ed().look().medium.density, 1.5);
+    assert!(
+        wait_for(&mut h, Duration::from_secs(300), |e| !e.accuracy_running()),
+        "the reference did not finish"
+    );
+    let (scatter, hdr) = h.state().ed().accuracy_rel_rmse().expect("no accuracy result");
+    let (w, ht) = h.state().ed().accuracy_size().unwrap();
+    eprintln!("accuracy check at {w}x{ht}: scattered light rel. RMSE {scatter:.4}, final {hdr:.4}");
+    assert!(scatter.is_finite() && hdr.is_finite());
+    // The same measurement made independently (headless GPU renderer, reference, metrics) agrees:
+    // the check measured the look and view it was started on, at its size.
+    let scene = small_scene();
+    let mut r = epivox::render::Renderer::new(GpuContext::headless().unwrap(), &epivox::gpu::ShaderLibrary::default()).unwrap();
+    let gpu = r.render(&scene, w, ht, epivox::render::Method::Vsv).unwrap();
+    let reference = epivox::reference::render(&scene, w, ht, &epivox::editor::check_options());
+    let expect = epivox::metrics::compare(&gpu.scatter, &reference.scatter).unwrap().rel_rmse;
+    assert!((expect - scatter).abs() < 1e-3 + 0.02 * expect, "editor {scatter} vs independent {expect}");
+    assert!(has_label_containing(&h, "rel. RMSE"));
+    assert!(has_label_containing(&h, "measured for an earlier look"), "the result is not marked stale after an edit");
+    // Cancel: the job stops, nothing replaces the last result.
+    h.state_mut().ed_mut().apply(Command::StartAccuracy { width: 256 });
+    h.state_mut().ed_mut().apply(Command::CancelAccuracy);
+    assert!(wait_for(&mut h, Duration::from_secs(60), |e| !e.accuracy_running()), "cancel did not stop the job");
+    assert!(h.state().ed().messages().iter().any(|m| m.text.contains("cancelled")));
+}
+
+#[test]
+fn broken_shaders_at_start_fall_back_to_the_embedded_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let shaders = copy_shaders(dir.path());
+    std::fs::write(shaders.join("scan.wgsl"), "#import common\nfn nope( {\n").unwrap();
+    let mut opts = options(dir.path());
+    opts.shader_dir = Some(shaders.clone());
+    opts.watch_shaders = true;
+    let Some(mut h) = harness(opts) else { return };
+    let err = h.state().ed().shader_error.clone().expect("the broken shader is reported");
+    assert!(err.contains("scan.wgsl:2:"), "{err}");
+    let (px, ..) = viewport_pixels(&mut h);
+    assert!(distinct_colours(&px) > 200, "no picture from the embedded shaders");
+    // Fixing the file on disk clears the error (the folder is still watched).
+    std::fs::write(shaders.join("scan.wgsl"), EMBEDDED.iter().find(|(n, _)| *n == "scan.wgsl").unwrap().1).unwrap();
+    assert!(wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.is_none()));
 }

@@ -84,6 +84,10 @@ pub fn reference_key(scene: &Scene, width: u32, height: u32, opts: &ReferenceOpt
     h.str(&json(serde_json::to_string(&scene.camera)));
     h.str(&json(serde_json::to_string(&scene.light)));
     h.str(&json(serde_json::to_string(&scene.medium)));
+    // Derived data the reference uses, computed by code outside it that may change.
+    let mb = scene.medium_bounds();
+    h.f32s(&mb.min.to_array());
+    h.f32s(&mb.max.to_array());
     h.u64(width as u64);
     h.u64(height as u64);
     h.u64(opts.samples as u64);

@@ -321,15 +321,23 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// For each (time, error) point: on the Pareto front, i.e. no other point is at least as fast and at
-/// least as accurate and strictly better in one. Non-finite points are never on it.
+/// Errors closer than this (relative) count as equal on the Pareto front: a point that is slower
+/// for a 0.1 % better error is not worth a place on it (and such differences are below the
+/// run-to-run noise of the shadow map and the driver).
+pub const PARETO_ERROR_TOLERANCE: f64 = 0.005;
+
+/// For each (time, error) point: on the Pareto front, i.e. no other point is at least as fast and
+/// at least as accurate (within [`PARETO_ERROR_TOLERANCE`]) and strictly better in one. Non-finite
+/// points are never on it.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
     let ok = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
     points
         .iter()
         .map(|a| {
             ok(a)
-                && !points.iter().any(|b| ok(b) && b.0 <= a.0 && b.1 <= a.1 && (b.0 < a.0 || b.1 < a.1))
+                && !points.iter().any(|b| {
+                    ok(b) && b.0 <= a.0 && b.1 <= a.1 * (1.0 + PARETO_ERROR_TOLERANCE) && (b.0 < a.0 || b.1 < a.1)
+                })
         })
         .collect()
 }
@@ -390,7 +398,9 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     bar.set_prefix("bench");
 
     let mut work = scene.clone();
-    let mut rows = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
+    // The most accurate scattered-light image of each method, for a look beside the reference.
+    let mut best: Vec<(&'static str, f64, crate::image::Image)> = Vec::new();
     let mut first_failure = None;
     for p in &points {
         bar.set_message(format!("{} {}", p.method_name(), p.setting()));
@@ -398,6 +408,12 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
             Ok((timing, o)) => {
                 let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
                 let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
+                let name = p.method_name();
+                match best.iter_mut().find(|b| b.0 == name) {
+                    Some(b) if scatter.rel_rmse < b.1 => *b = (name, scatter.rel_rmse, o.scatter),
+                    Some(_) => {}
+                    None => best.push((name, scatter.rel_rmse, o.scatter)),
+                }
                 rows.push(Row { point: *p, timing, scatter, hdr });
             }
             Err(e) => {
@@ -483,10 +499,34 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         ));
     }
     results.files = report::write_all(&results, out)?;
+    results.files.extend(write_scatter_images(&reference.scatter, &best, out)?);
     results.seconds = started.elapsed().as_secs_f64();
     // The report states the run time: write it once more now that it is known.
     report::write_markdown(&results, out)?;
     Ok(results)
+}
+
+/// `scatter_reference.png` and `scatter_<method>.png` (each method's most accurate point), all at
+/// one exposure: the reference's 99.5th percentile maps to 2.5 before tone mapping.
+fn write_scatter_images(
+    reference: &crate::image::Image,
+    best: &[(&'static str, f64, crate::image::Image)],
+    dir: &Path,
+) -> Result<Vec<PathBuf>, BenchError> {
+    let mut v: Vec<f32> = reference.pixels.iter().flat_map(|p| p.iter().copied()).filter(|c| c.is_finite()).collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let p = v.get(v.len().saturating_sub(1).min(v.len() * 995 / 1000)).copied().unwrap_or(0.0);
+    let exposure = if p > 0.0 { (2.5 / p).log2() } else { 0.0 };
+    let mut files = Vec::new();
+    let path = dir.join("scatter_reference.png");
+    reference.write_png(&path, exposure)?;
+    files.push(path);
+    for (name, _, img) in best {
+        let path = dir.join(format!("scatter_{name}.png"));
+        img.write_png(&path, exposure)?;
+        files.push(path);
+    }
+    Ok(files)
 }
 
 /// The directory's files a benchmark writes.
@@ -508,6 +548,9 @@ mod tests {
     fn pareto_front_keeps_only_undominated_points() {
         let p = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (4.0, 0.1), (2.0, 0.25), (f64::NAN, 0.0)];
         assert_eq!(pareto_front(&p), [true, true, false, true, false, false]);
+        // Slower for an error better by less than the tolerance: off the front.
+        assert_eq!(pareto_front(&[(1.0, 0.1002), (2.0, 0.1)]), [true, false]);
+        assert_eq!(pareto_front(&[(1.0, 0.11), (2.0, 0.1)]), [true, true]);
     }
 
     #[test]

@@ -332,6 +332,12 @@ pub fn markdown(r: &BenchResults) -> String {
     );
 
     let _ = writeln!(s, "## Error against time\n\n![error against time](error_vs_time.png)\n");
+    let _ = writeln!(
+        s,
+        "Scattered light of the reference and of each method's most accurate point, at one exposure: \
+         `scatter_reference.png`{}.\n",
+        methods(&r.rows).iter().map(|m| format!(", `scatter_{m}.png`")).collect::<String>()
+    );
     let _ = writeln!(s, "| method | setting | total ms | volume ms | rel RMSE | max abs | PSNR dB | final rel RMSE | front |");
     let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|:-:|");
     for m in methods(&r.rows) {

@@ -60,6 +60,7 @@ struct Samples {
     render_ms: Vec<f64>,
     gpu_ms: Vec<f64>,
     last_frame: Option<Instant>,
+    last_generation: Option<u64>,
 }
 
 /// The method list of the toolbar, with the ray-marching baseline's default steps.
@@ -132,6 +133,8 @@ pub struct Editor {
     viewport_px: [u32; 4],
     render_size: [u32; 2],
     viewport_rect: Option<egui::Rect>,
+    /// Open the Accuracy section on the next frame.
+    open_accuracy: bool,
     /// A CPU adapter (the software Vulkan driver): frames take seconds; say so.
     software: bool,
 }
@@ -163,10 +166,20 @@ impl Editor {
             buffer_bytes: l.max_storage_buffer_binding_size.min(l.max_buffer_size),
             texture_side: l.max_texture_dimension_2d,
         };
-        let resources = ViewportResources::new(gpu, &shaders, render_state.target_format)?;
+        let mut messages = Vec::new();
+        // Broken shaders on disk at start-up: run on the embedded copies and show the error, so
+        // the editor still opens and picks the folder up again once the file is fixed.
+        let mut shader_error = None;
+        let resources = match ViewportResources::new(gpu.clone(), &shaders, render_state.target_format) {
+            Ok(r) => r,
+            Err(e) if shaders.dir().is_some() => {
+                shader_error = Some(e.to_string());
+                ViewportResources::new(gpu, &ShaderLibrary::embedded(), render_state.target_format)?
+            }
+            Err(e) => return Err(e.into()),
+        };
         render_state.renderer.write().callback_resources.insert(resources);
 
-        let mut messages = Vec::new();
         let watcher = match (opts.watch_shaders, shaders.dir()) {
             (true, Some(dir)) => {
                 let c = ctx.clone();
@@ -210,7 +223,7 @@ impl Editor {
             shaders,
             shader_epoch: 0,
             watcher,
-            shader_error: None,
+            shader_error,
             adapter,
             timestamps,
             limits,
@@ -240,6 +253,7 @@ impl Editor {
             viewport_px: [0; 4],
             render_size: [0; 2],
             viewport_rect: None,
+            open_accuracy: false,
             software,
         })
     }
@@ -287,10 +301,34 @@ impl Editor {
     pub fn accuracy_running(&self) -> bool {
         self.accuracy_job.is_some()
     }
+    /// Size of the last accuracy check's images.
+    pub fn accuracy_size(&self) -> Option<(u32, u32)> {
+        self.accuracy_result.as_ref().map(|r| (r.width, r.height))
+    }
     /// (scattered, final) relative RMSE of the last accuracy check.
     pub fn accuracy_rel_rmse(&self) -> Option<(f64, f64)> {
         let r = self.accuracy_result.as_ref()?;
         Some((r.scatter.as_ref().ok()?.rel_rmse, r.hdr.as_ref().ok()?.rel_rmse))
+    }
+    /// The (plane, ray) under the pointer in the viewport, when the pointer is over it.
+    pub fn viewport_cell(&self) -> Option<(f64, f64)> {
+        self.viewport_cell
+    }
+    /// The (plane, ray) under the pointer in the inspector's grid picture.
+    pub fn inspector_cell(&self) -> Option<(f64, f64)> {
+        self.inspector.hovered
+    }
+    /// Where the inspector drew its grid picture (points).
+    pub fn inspector_grid_rect(&self) -> Option<egui::Rect> {
+        self.inspector.grid_rect
+    }
+    /// Where the light's handle is drawn in the viewport (points), when it is in view.
+    pub fn light_handle_pos(&self) -> Option<egui::Pos2> {
+        light_handle(&self.look.camera, self.viewport_rect?, &self.look.light)
+    }
+    /// The plane the inspector's slice shows.
+    pub fn slice_plane(&self) -> u32 {
+        self.inspector.slice_plane
     }
     /// The viewport's rectangle in points (after the first frame).
     pub fn viewport_rect(&self) -> Option<egui::Rect> {
@@ -337,9 +375,6 @@ impl Editor {
 
     /// Applies one command. Every change of editor state goes through here.
     pub fn apply(&mut self, cmd: Command) {
-        if !cmd.is_edit() {
-            self.history.break_merge();
-        }
         match cmd {
             Command::SetMedium(m, key) => {
                 if m.validate().is_ok() {
@@ -391,7 +426,10 @@ impl Editor {
             Command::ShowInspector(v) => self.inspector.visible = v,
             Command::SetInspectorMode(m) => self.inspector.mode = m,
             Command::SetSlicePlane(p) => self.inspector.slice_plane = p,
-            Command::LoadPreset(path) => self.load_preset(&path),
+            Command::LoadPreset(path) => {
+                self.history.break_merge();
+                self.load_preset(&path);
+            }
             Command::SavePreset => match self.preset_path.clone() {
                 Some(p) => self.save_preset(&p),
                 None => self.apply(Command::SavePresetAsDialog),
@@ -469,6 +507,7 @@ impl Editor {
         match preset.save(path) {
             Ok(()) => {
                 self.preset_path = Some(path.to_path_buf());
+                self.presets_panel.invalidate();
                 self.recent.add_preset(path);
                 self.remember_recent();
                 self.info(format!("preset saved to {}", path.display()));
@@ -593,6 +632,7 @@ impl Editor {
         });
         match gpu {
             Some(Ok(out)) => {
+                self.open_accuracy = true;
                 let ctx = self.ctx.clone();
                 self.accuracy_job = Some(AccuracyJob::start(
                     scene,
@@ -617,17 +657,23 @@ impl Editor {
                 cmds.push(Command::ReloadShaders);
             }
         }
-        if let Some((purpose, picked)) = self.dialogs.poll() {
-            if let Some(p) = picked {
-                cmds.push(match purpose {
-                    DialogPurpose::OpenScene => Command::OpenScene(p),
-                    DialogPurpose::OpenPreset => Command::LoadPreset(p),
-                    // The portal's own dialog asks before replacing; ask anyway (it may not).
-                    DialogPurpose::SavePresetAs => Command::SavePresetAs { path: p, overwrite: false },
-                    DialogPurpose::Screenshot => Command::Screenshot(p),
-                    DialogPurpose::ExportInspector => Command::ExportInspector(p),
-                });
-            }
+        // A cancelled dialog (None) does nothing.
+        let polled = self.dialogs.poll();
+        if let Some((_, None, true)) = polled {
+            self.error(
+                "no file dialog could be shown (it needs the XDG desktop portal or zenity); \
+                 drop the file on the window instead",
+            );
+        }
+        if let Some((purpose, Some(p), _)) = polled {
+            cmds.push(match purpose {
+                DialogPurpose::OpenScene => Command::OpenScene(p),
+                DialogPurpose::OpenPreset => Command::LoadPreset(p),
+                // The portal's own dialog asks before replacing; ask anyway (it may not).
+                DialogPurpose::SavePresetAs => Command::SavePresetAs { path: p, overwrite: false },
+                DialogPurpose::Screenshot => Command::Screenshot(p),
+                DialogPurpose::ExportInspector => Command::ExportInspector(p),
+            });
         }
         if let Some((path, rx)) = &self.scene_job {
             match rx.try_recv() {
@@ -667,7 +713,20 @@ impl Editor {
 
     /// Reads the grid back for the inspector when it is visible and a newer frame exists.
     fn update_inspector(&mut self) {
-        let visible = self.inspector.visible;
+        // Reading back a grid of hundreds of MiB every frame would stall editing: above this the
+        // inspector says so instead.
+        const INSPECT_LIMIT: u64 = 256 << 20;
+        let too_large = self.look.grid.bytes() > INSPECT_LIMIT;
+        let visible = self.inspector.visible && !too_large;
+        if self.inspector.visible && too_large {
+            self.inspector.snapshot = None;
+            self.inspector.error = Some(format!(
+                "the {} grid ({}) is too large to inspect live; the inspector reads grids up to {}",
+                self.look.grid,
+                super::panels::bytes(self.look.grid.bytes()),
+                super::panels::bytes(INSPECT_LIMIT)
+            ));
+        }
         let have = self.inspector.snapshot_generation();
         let result = self.with_resources_mut(|r| {
             if visible != r.renderer_keeps_geometry() {
@@ -896,9 +955,18 @@ impl Editor {
                     "Software driver: a frame takes seconds. A smaller grid (Grid) or fewer pixels (toolbar) keeps editing responsive.",
                 );
             }
-            self.stats_panel.show(ui, report.as_ref(), self.ui_frame_ms, look.grid.bytes(), &self.adapter, self.timestamps, look.light.is_point());
+            let ctx = super::panels::StatsContext {
+                ui_frame_ms: self.ui_frame_ms,
+                grid_bytes: look.grid.bytes(),
+                adapter: &self.adapter,
+                timestamps: self.timestamps,
+                point_light: look.light.is_point(),
+            };
+            self.stats_panel.show(ui, report.as_ref(), &ctx);
         });
-        egui::CollapsingHeader::new("Accuracy").default_open(false).show(ui, |ui| {
+        // Starting a check (from anywhere) opens the section, so its progress is in view.
+        let open = std::mem::take(&mut self.open_accuracy).then_some(true);
+        egui::CollapsingHeader::new("Accuracy").default_open(false).open(open).show(ui, |ui| {
             let stale = self.accuracy_result.as_ref().is_some_and(|r| {
                 let l = Look::of(&r.scene, look.exposure);
                 l != look
@@ -969,6 +1037,9 @@ impl Editor {
             if ui.add_enabled(self.history.can_redo(), egui::Button::new("Redo")).clicked() {
                 cmds.push(Command::Redo);
             }
+            if ui.button("Screenshot…").on_hover_text("Save the viewport's picture as PNG").clicked() {
+                cmds.push(Command::ScreenshotDialog);
+            }
         });
     }
 
@@ -1032,10 +1103,12 @@ impl Editor {
             let d = response.drag_delta();
             if d != egui::Vec2::ZERO {
                 let l = drag_light(&self.look.camera, &self.look.light, d, rect.height());
-                cmds.push(Command::SetLight(l, Some(response.id.with("light"))));
+                cmds.push(Command::SetLight(l, Some(super::command::gesture_key(&response, response.id.with("light")))));
             }
         } else if let Some(c) = self.camera.handle(ui, &response, &self.look.camera, self.scene.bounds().radius(), rect.height()) {
-            cmds.push(Command::SetCamera(c, Some(response.id.with("camera"))));
+            // Wheel and keys (no press) merge by frame-less key: one step per burst of them.
+            let key = if response.dragged() { super::command::gesture_key(&response, response.id.with("camera")) } else { response.id.with("camera-wheel") };
+            cmds.push(Command::SetCamera(c, Some(key)));
         }
         if response.drag_stopped() {
             self.dragging_light = false;
@@ -1153,20 +1226,23 @@ impl Editor {
         let Some(q) = &mut self.quit else { return };
         let now = Instant::now();
         if q.frames_left > 0 {
-            if let Some(t) = self.samples.last_frame {
-                self.samples.frame_ms.push((now - t).as_secs_f64() * 1e3);
-            }
-            self.samples.last_frame = Some(now);
-            q.frames_left -= 1;
             self.ctx.request_repaint();
-            // The report of the frame rendered in the previous paint.
+            // Count rendered frames: a new report means the previous paint rendered one.
             let rep = {
                 let r = self.render_state.renderer.read();
                 r.callback_resources.get::<ViewportResources>().and_then(|r| r.report.clone())
             };
-            if let Some(Ok(info)) = rep.as_ref().map(|r| &r.result) {
-                self.samples.render_ms.push(rep.as_ref().map(|r| r.render_ms).unwrap_or(0.0));
-                self.samples.gpu_ms.push(info.timings.iter().map(|t| t.ms).sum());
+            if let Some(rep) = rep.filter(|r| Some(r.generation) != self.samples.last_generation) {
+                self.samples.last_generation = Some(rep.generation);
+                if let Some(t) = self.samples.last_frame {
+                    self.samples.frame_ms.push((now - t).as_secs_f64() * 1e3);
+                }
+                self.samples.last_frame = Some(now);
+                if let Ok(info) = &rep.result {
+                    self.samples.render_ms.push(rep.render_ms);
+                    self.samples.gpu_ms.push(info.timings.iter().map(|t| t.ms).sum());
+                }
+                q.frames_left -= 1;
             }
             return;
         }
@@ -1223,7 +1299,7 @@ impl Editor {
         }
         if let Ok(mut s) = sink.lock() {
             *s = RunSummary {
-                frames: self.samples.frame_ms.len() as u32 + 1,
+                frames: self.samples.render_ms.len() as u32,
                 frame_ms_mean: mean(&self.samples.frame_ms),
                 render_ms_mean: mean(&self.samples.render_ms),
                 gpu_ms_mean: mean(&self.samples.gpu_ms),

@@ -13,9 +13,16 @@ use std::path::PathBuf;
 /// merges (a click, a typed value).
 pub type MergeKey = Option<egui::Id>;
 
-/// The key for a widget's change: the widget's id while it is being dragged, else `None`.
+/// The key for a widget's change: while it is being dragged, the widget's id together with the
+/// moment the pointer was pressed (so two drags of the same slider are two undo steps); else `None`.
 pub fn merge_key(r: &egui::Response) -> MergeKey {
-    (r.dragged() || r.drag_stopped()).then_some(r.id)
+    (r.dragged() || r.drag_stopped()).then(|| gesture_key(r, r.id))
+}
+
+/// `id` made unique to the current press of the pointer.
+pub fn gesture_key(r: &egui::Response, id: egui::Id) -> egui::Id {
+    let pressed = r.ctx.input(|i| i.pointer.press_start_time()).unwrap_or(0.0);
+    id.with(pressed.to_bits())
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -60,19 +67,4 @@ pub enum Command {
     CancelAccuracy,
     ReloadShaders,
     DismissMessages,
-}
-
-impl Command {
-    /// True for the commands that change the look (and so the undo history).
-    pub fn is_edit(&self) -> bool {
-        matches!(
-            self,
-            Command::SetMedium(..)
-                | Command::SetLight(..)
-                | Command::SetGrid(..)
-                | Command::SetCamera(..)
-                | Command::SetExposure(..)
-                | Command::ResetCamera
-        )
-    }
 }

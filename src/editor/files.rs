@@ -96,12 +96,13 @@ pub struct Dialogs {
     tx: mpsc::Sender<(DialogPurpose, Option<PathBuf>)>,
     rx: mpsc::Receiver<(DialogPurpose, Option<PathBuf>)>,
     pub open: Option<DialogPurpose>,
+    opened_at: Option<std::time::Instant>,
 }
 
 impl Default for Dialogs {
     fn default() -> Self {
         let (tx, rx) = mpsc::channel();
-        Dialogs { tx, rx, open: None }
+        Dialogs { tx, rx, open: None, opened_at: None }
     }
 }
 
@@ -112,6 +113,7 @@ impl Dialogs {
             return;
         }
         self.open = Some(purpose);
+        self.opened_at = Some(std::time::Instant::now());
         let tx = self.tx.clone();
         let spawned = std::thread::Builder::new().name("epivox-file-dialog".into()).spawn(move || {
             let mut d = rfd::AsyncFileDialog::new();
@@ -164,11 +166,15 @@ impl Dialogs {
         }
     }
 
-    /// A dialog that closed since the last call: its purpose and the chosen path (None: cancelled).
-    pub fn poll(&mut self) -> Option<(DialogPurpose, Option<PathBuf>)> {
-        let r = self.rx.try_recv().ok()?;
+    /// A dialog that closed since the last call: its purpose, the chosen path (None: cancelled),
+    /// and whether it came back so fast that no dialog can have been shown (no desktop portal and
+    /// no zenity: rfd then returns nothing without a word).
+    pub fn poll(&mut self) -> Option<(DialogPurpose, Option<PathBuf>, bool)> {
+        let (purpose, path) = self.rx.try_recv().ok()?;
         self.open = None;
-        Some(r)
+        let instant = self.opened_at.take().is_some_and(|t| t.elapsed() < std::time::Duration::from_millis(250));
+        let failed = instant && path.is_none();
+        Some((purpose, path, failed))
     }
 }
 

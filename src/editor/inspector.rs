@@ -257,6 +257,8 @@ pub struct Inspector {
     tracer: Option<(u64, Arc<Tracer>)>,
     /// The (plane, ray) under the pointer in the inspector (drives the viewport highlight).
     pub hovered: Option<(f64, f64)>,
+    /// Where the grid picture was drawn (points).
+    pub grid_rect: Option<egui::Rect>,
 }
 
 impl Default for Inspector {
@@ -275,6 +277,7 @@ impl Default for Inspector {
             tex_key: None,
             tracer: None,
             hovered: None,
+            grid_rect: None,
         }
     }
 }
@@ -400,29 +403,44 @@ impl Inspector {
         self.refresh(ui.ctx(), scene, scene_generation);
         let Some(snapshot) = &self.snapshot else { return };
         let g = snapshot.grid;
-        // Both pictures share the ray axis (down): fit them side by side into the space left.
+        // Both pictures have the rays down. Side by side they share that axis; in a narrow column
+        // they are stacked instead. Take whichever layout shows the grid picture larger.
         let avail = ui.available_size();
         let gw = self.grid_img.as_ref().map(|i| i.size[0] as f32).unwrap_or(1.0);
         let gh = self.grid_img.as_ref().map(|i| i.size[1] as f32).unwrap_or(1.0);
         let sw = self.slice_img.as_ref().map(|i| i.size[0] as f32).unwrap_or(1.0);
         let sh = self.slice_img.as_ref().map(|i| i.size[1] as f32).unwrap_or(1.0);
-        let height = (avail.y - 24.0).max(64.0);
-        // Widths as if both were `height` tall; squeeze to the available width.
-        let (wg, ws) = (height * gw / gh, height * sw / sh * 0.5);
-        let scale = ((avail.x - 12.0) / (wg + ws)).min(1.0);
-        let (gsize, ssize) = (egui::vec2(wg, height) * scale, egui::vec2(ws, height) * scale);
+        let room = egui::vec2(avail.x - 12.0, avail.y - 30.0).max(egui::vec2(64.0, 64.0));
+        let side = {
+            // Widths as if both were as tall as the room (the slice at least half as wide as the grid
+            // picture, however few its bins), squeezed to the room's width.
+            let wg = room.y * gw / gh;
+            let ws = (room.y * sw / sh).max(wg * 0.5);
+            let scale = (room.x / (wg + ws)).min(1.0);
+            (egui::vec2(wg, room.y) * scale, egui::vec2(ws, room.y) * scale)
+        };
+        let stacked = {
+            let g_h = (room.x * gh / gw).min(room.y * 0.6);
+            let g = egui::vec2(g_h * gw / gh, g_h);
+            (g, egui::vec2(room.x, (room.y - g_h - 8.0).max(48.0)))
+        };
+        let stack = stacked.0.x * stacked.0.y > side.0.x * side.0.y;
+        let (gsize, ssize) = if stack { stacked } else { side };
+        let layout = if stack { egui::Layout::top_down(egui::Align::Min) } else { egui::Layout::left_to_right(egui::Align::Min) };
         let mut hovered = None;
         let stroke = egui::Stroke::new(1.0, egui::Color32::from_rgb(80, 255, 120));
-        ui.horizontal_top(|ui| {
+        ui.with_layout(layout, |ui| {
             if let Some(t) = &self.grid_tex {
                 let r = ui.add(egui::Image::new((t.id(), gsize)).sense(egui::Sense::hover()));
                 let rect = r.rect;
+                self.grid_rect = Some(rect);
                 if let Some(pos) = r.hover_pos() {
                     let x = ((pos.x - rect.left()) / rect.width() * g.planes as f32) as f64;
                     let y = ((pos.y - rect.top()) / rect.height() * g.rays as f32) as f64;
                     hovered = Some((x, y));
                 }
-                let mark = hovered.or(viewport_cell);
+                // The slice is drawn after this picture: its hover is last frame's.
+                let mark = hovered.or(self.hovered).or(viewport_cell);
                 if let Some((x, y)) = mark {
                     let px = rect.left() + x as f32 / g.planes as f32 * rect.width();
                     let py = rect.top() + y as f32 / g.rays as f32 * rect.height();

@@ -36,6 +36,7 @@ mod state;
 mod viewport;
 mod watch;
 
+pub use accuracy::check_options;
 pub use app::Editor;
 pub use command::{Command, MergeKey};
 pub use inspector::InspectorMode;
@@ -157,8 +158,9 @@ pub fn initial_scene(opts: &EditorOptions) -> Result<(Scene, f32, Option<PathBuf
 /// What a run measured (printed by `epivox edit --quit-after-frames`).
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct RunSummary {
+    /// Frames rendered.
     pub frames: u32,
-    /// Wall time between frames, mean over all but the first (ms).
+    /// Wall time from one rendered frame to the next (UI, render, present), mean (ms).
     pub frame_ms_mean: f64,
     /// `Renderer::render_frame` wall time (CPU + waiting for the GPU), mean (ms).
     pub render_ms_mean: f64,

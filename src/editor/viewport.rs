@@ -7,7 +7,7 @@
 //! texture through `shaders/display.wgsl` (exposure, ACES fit, sRGB).
 
 use crate::gpu::{GpuContext, GpuError, ShaderLibrary};
-use crate::render::{FrameInfo, Method, Renderer};
+use crate::render::{FrameInfo, Method, PruneReport, Renderer};
 use crate::scene::{Camera, Scene};
 use eframe::egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor};
 use std::sync::Arc;
@@ -48,6 +48,8 @@ pub struct FrameReport {
     pub method: Method,
     /// The last frame that succeeded (what is on screen).
     pub last_good: Option<GoodFrame>,
+    /// What fitting the work to the frame kept and dropped (for the Stats panel).
+    pub prune: Option<PruneReport>,
 }
 
 /// A frame that rendered: what the viewport shows, and how its pixels map to the grid.
@@ -231,8 +233,11 @@ impl ViewportResources {
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.rendered_generation = Some(req.generation);
         let mut last_good = self.report.as_ref().and_then(|r| r.last_good.clone());
+        let mut prune = self.report.as_ref().and_then(|r| r.prune.clone());
         let result = match result {
             Ok(info) => {
+                // Two tiny readbacks (the fitted bin range, the cull counters).
+                prune = self.renderer.prune_report(&info).ok();
                 self.frames_rendered += 1;
                 self.last_good_generation = Some(req.generation);
                 last_good = Some(GoodFrame {
@@ -255,6 +260,7 @@ impl ViewportResources {
             height: req.height,
             method: req.method,
             last_good,
+            prune,
         });
     }
 

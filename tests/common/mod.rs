@@ -35,7 +35,13 @@ pub fn quad(name: &str, c: Vec3, u: Vec3, v: Vec3) -> Mesh {
 pub fn cube(name: &str, c: Vec3, h: Vec3) -> Mesh {
     let mut positions = Vec::new();
     for i in 0..8 {
-        positions.push(c + h * Vec3::new(if i & 1 == 0 { -1.0 } else { 1.0 }, if i & 2 == 0 { -1.0 } else { 1.0 }, if i & 4 == 0 { -1.0 } else { 1.0 }));
+        positions.push(
+            c + h * Vec3::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { -1.0 } else { 1.0 },
+            ),
+        );
     }
     let faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
     let triangles = faces.iter().flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]]).collect();
@@ -75,7 +81,13 @@ pub fn point_light(p: Vec3) -> Light {
 }
 
 /// Renders with the GPU and the reference and returns (gpu scatter, reference scatter, stats).
-pub fn against_reference(r: &mut Renderer, scene: &Scene, method: Method, w: u32, h: u32) -> (Image, Image, metrics::ErrorStats) {
+pub fn against_reference(
+    r: &mut Renderer,
+    scene: &Scene,
+    method: Method,
+    w: u32,
+    h: u32,
+) -> (Image, Image, metrics::ErrorStats) {
     let out = r.render(scene, w, h, method).unwrap_or_else(|e| panic!("{e}"));
     let reference = reference::render(scene, w, h, &ReferenceOptions { progress: false, ..Default::default() });
     let stats = metrics::compare(&out.scatter, &reference.scatter).unwrap_or_else(|e| panic!("{e}"));

@@ -50,7 +50,7 @@ impl AlbedoExtinction {
     }
 
     /// Writes back scattering and absorption (density and phase untouched).
-    pub fn to_medium(&self, m: &Medium) -> Medium {
+    pub fn to_medium(self, m: &Medium) -> Medium {
         let t = self.extinction_colour * self.extinction;
         let a = (self.albedo_colour * self.albedo).clamp(Vec3::ZERO, Vec3::ONE);
         let s = t * a;

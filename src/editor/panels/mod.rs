@@ -17,7 +17,7 @@ pub use light::LightPanel;
 pub use medium::MediumPanel;
 pub use phase::PhasePanel;
 pub use presets::PresetsPanel;
-pub use stats::StatsPanel;
+pub use stats::{StatsContext, StatsPanel};
 
 use super::command::{merge_key, Command, MergeKey};
 use crate::params::Spec;

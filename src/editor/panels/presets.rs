@@ -6,17 +6,12 @@ use eframe::egui;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+#[derive(Default)]
 pub struct PresetsPanel {
     /// Name typed for "Save as new preset".
     pub name: String,
     list: Vec<PathBuf>,
     listed: Option<(PathBuf, Instant)>,
-}
-
-impl Default for PresetsPanel {
-    fn default() -> Self {
-        PresetsPanel { name: String::new(), list: Vec::new(), listed: None }
-    }
 }
 
 /// A file name from a typed preset name: letters, digits, `-` and `_` kept, the rest dashes.
@@ -31,6 +26,11 @@ pub fn file_name_for(name: &str) -> Option<String> {
 }
 
 impl PresetsPanel {
+    /// Reads the folder again on the next frame (after a save).
+    pub fn invalidate(&mut self) {
+        self.listed = None;
+    }
+
     /// Re-reads the folder at most every two seconds (a preset saved elsewhere shows up).
     fn refresh(&mut self, dir: &Path) {
         let fresh = self.listed.as_ref().is_some_and(|(d, t)| d == dir && t.elapsed() < Duration::from_secs(2));

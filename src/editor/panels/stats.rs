@@ -3,11 +3,23 @@
 
 use super::bytes;
 use crate::editor::viewport::FrameReport;
-use crate::render::{FrameSetup, Method};
+use crate::render::{FrameSetup, Method, PruneReport};
 use eframe::egui;
 
 #[derive(Default)]
 pub struct StatsPanel;
+
+/// What the Stats panel shows besides the frame report.
+#[derive(Debug, Clone, Copy)]
+pub struct StatsContext<'a> {
+    /// Smoothed time between UI frames (ms).
+    pub ui_frame_ms: f64,
+    pub grid_bytes: u64,
+    pub adapter: &'a str,
+    /// The adapter has encoder timestamps.
+    pub timestamps: bool,
+    pub point_light: bool,
+}
 
 /// Lines saying what the fitted frame leaves out (DESIGN section 6), from its setup.
 pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
@@ -44,8 +56,34 @@ pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
     v
 }
 
+/// Lines from the renderer's own account of what it kept and dropped.
+pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
+    let unit = if point_light { "°" } else { " unit" };
+    let mut v = vec![format!("passes: {}", p.passes.join(" › "))];
+    if !p.passes.contains(&"voxelize") {
+        v.push("no grid this frame".into());
+        return v;
+    }
+    if !p.enabled {
+        v.push("fitting the work to the frame is off".into());
+    }
+    v.push(format!("planes: over {:.1}° of 360°", p.planes_span_deg));
+    v.push(format!("rays: γ {:.1}°–{:.1}°", p.rays_gamma_deg[0], p.rays_gamma_deg[1]));
+    v.push(format!(
+        "bins: z {:.3}–{:.3}{unit} (casters {:.3}–{:.3}{unit}), {} words per ray",
+        p.bins_z[0], p.bins_z[1], p.bins_z_casters[0], p.bins_z_casters[1], p.words_per_ray
+    ));
+    let t = &p.triangles;
+    v.push(format!(
+        "triangles voxelized: {} of {} (dropped {} outside the view, {} beyond the visible depth)",
+        t.kept, p.triangles_total, t.culled_view, t.culled_depth
+    ));
+    v
+}
+
 impl StatsPanel {
-    pub fn show(&mut self, ui: &mut egui::Ui, report: Option<&FrameReport>, ui_frame_ms: f64, grid_bytes: u64, adapter: &str, timestamps: bool, point_light: bool) {
+    pub fn show(&mut self, ui: &mut egui::Ui, report: Option<&FrameReport>, c: &StatsContext<'_>) {
+        let StatsContext { ui_frame_ms, grid_bytes, adapter, timestamps, point_light } = *c;
         ui.label(egui::RichText::new(adapter).small());
         ui.label(format!("UI frame: {ui_frame_ms:.1} ms"));
         let Some(r) = report else {
@@ -76,7 +114,11 @@ impl StatsPanel {
             });
         }
         ui.label(format!("grid memory: {} (+ the same again while the inspector keeps the geometry grid)", bytes(grid_bytes)));
-        for line in savings(&info.setup, point_light) {
+        let lines = match &r.prune {
+            Some(p) => prune_lines(p, point_light),
+            None => savings(&info.setup, point_light),
+        };
+        for line in lines {
             ui.label(egui::RichText::new(line).small());
         }
     }
