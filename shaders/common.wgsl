@@ -8,8 +8,14 @@ const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;
 const INV_4PI: f32 = 0.0795774715459477;
 
+// Specialisation (DESIGN section 6): the light type and the phase function are pipeline-overridable
+// constants, set per pipeline by `src/render/variant.rs` (one pipeline per variant in use), so the
+// branches on them fold away when the pipeline is built instead of running per pixel. The values
+// here are only defaults for validation; every pipeline sets both.
+override POINT_LIGHT: bool = true; // point light (else directional)
+override PHASE: u32 = 0u;          // Phase::id(): 0 isotropic, 1 HG, 2 Schlick, 3 Cornette-Shanks, 4 Rayleigh
+
 // flags
-const FLAG_POINT: u32 = 1u;        // point light (else directional)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_COSINE_BINS: u32 = 4u;  // bins uniform in cos(psi) (else uniform in psi / r)
 const FLAG_CARTESIAN: u32 = 8u;    // screen-space Cartesian grid (the paper's section 2)
@@ -43,13 +49,13 @@ struct Frame {
     medium_max: vec4f,
     // planes, rays, bins, words per ray.
     grid: vec4u,
-    // image width, height, phase id, flags.
+    // image width, height, unused (the phase function is the PHASE override), flags.
     image: vec4u,
     // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); unused.
     table: vec4u,
 }
 
-fn is_point_light(f: Frame) -> bool { return (f.image.w & FLAG_POINT) != 0u; }
+fn is_point_light() -> bool { return POINT_LIGHT; }
 
 // ---- pixels --------------------------------------------------------------------------------
 
@@ -119,7 +125,7 @@ fn z_of_bin(f: Frame, k: f32) -> f32 {
 // z (psi for a point light, r for a directional one) of the point at distance t along a view ray
 // that makes angle gamma with the axis.
 fn z_along(f: Frame, gamma: f32, t: f32) -> f32 {
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         return atan2(t * sin(gamma), f.axis.w - t * cos(gamma));
     }
     return t * sin(gamma);
@@ -178,8 +184,8 @@ fn lobe_den(g: f32, omc: f32, opc: f32) -> f32 {
     return (1.0 + g) * (1.0 + g) - 2.0 * g * opc;
 }
 
-fn phase_core(id: u32, g: f32, c: f32, omc: f32, opc: f32) -> f32 {
-    switch id {
+fn phase_core(g: f32, c: f32, omc: f32, opc: f32) -> f32 {
+    switch PHASE {
         case 1u: { // Henyey-Greenstein
             let d = lobe_den(g, omc, opc);
             return (1.0 - g) * (1.0 + g) * INV_4PI / (d * sqrt(d));
@@ -201,16 +207,16 @@ fn phase_core(id: u32, g: f32, c: f32, omc: f32, opc: f32) -> f32 {
 }
 
 // The phase function of the cosine c of the deflection angle.
-fn phase(id: u32, g: f32, c: f32) -> f32 {
-    return phase_core(id, g, c, 1.0 - c, 1.0 + c);
+fn phase(g: f32, c: f32) -> f32 {
+    return phase_core(g, c, 1.0 - c, 1.0 + c);
 }
 
 // The phase function of the deflection angle theta itself: 1 -+ cos(theta) from half-angle sines,
 // exact near the lobes' peaks where cos(theta) has lost them (f32 cos(1e-3) keeps 1 - c to 12%).
-fn phase_of_angle(id: u32, g: f32, theta: f32) -> f32 {
+fn phase_of_angle(g: f32, theta: f32) -> f32 {
     let s = sin(0.5 * theta);
     let co = cos(0.5 * theta);
-    return phase_core(id, g, cos(theta), 2.0 * s * s, 2.0 * co * co);
+    return phase_core(g, cos(theta), 2.0 * s * s, 2.0 * co * co);
 }
 
 // (1 - exp(-x)) / x, accurate for small x (the expm1 trap of DESIGN section 5). The direct form

@@ -21,7 +21,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     var c = s;
     if (t >= 0.0) {
         var path = t;
-        if (!is_point_light(f)) {
+        if (!is_point_light()) {
             let v = pixel_dir(f, vec2f(id.xy));
             let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
             path = max(0.0, min(span.y, t) - span.x);

@@ -197,7 +197,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let bases = vec4u(ray_base(u32(x0), y0), ray_base(u32(x1), y0), ray_base(u32(x0), y1), ray_base(u32(x1), y1));
 
     var l = vec3f(0.0);
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         // Within 1e-6 rad of the light the f32 angle is noise (~6e-8), so the point-light formulas use
         // gp = max(gamma, 1e-6). For a soft light (r > 0) the table's G and h = D sin(gamma) both
         // vanish linearly toward the light and their ratio keeps its finite limit; with the raw angle
@@ -240,7 +240,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
                 if (weights[k] > 0.0) { lit += weights[k] * lit_directional(bases[k], v, z_scale, span.x, t_end, t_cut); }
             }
             // The deflection angle is gamma: the phase of the angle keeps the lobes' peaks exact.
-            let ph = phase_of_angle(f.image.z, f.sigma_s.w, gamma);
+            let ph = phase_of_angle(f.sigma_s.w, gamma);
             l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));
         }
     }

@@ -27,7 +27,7 @@ fn visible_z(p: vec2u) -> f32 {
         return max(t, 0.0) * dot(v, f.cam_fwd.xyz);
     }
     let gamma = angle_between(f.axis.xyz, v);
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         if (t_s < 0.0) { return PI - gamma; }
         return z_along(f, gamma, t_s);
     }

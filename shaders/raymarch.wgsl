@@ -62,7 +62,7 @@ fn cube_face(d: vec3f) -> u32 {
 fn lit(p: vec3f) -> f32 {
     var layer = 0u;
     var value = 0.0;
-    if (shadow.params.z > 0.5) {
+    if (POINT_LIGHT) {
         let d = p - f.light.xyz;
         layer = cube_face(d);
         value = length(d);
@@ -81,7 +81,7 @@ fn lit(p: vec3f) -> f32 {
     // 1.5 texels of bias (a texel is params.y, per unit of distance for the cube): only samples
     // just behind a surface are affected, and no normal exists in the medium to slope it by.
     var texel = shadow.params.y;
-    if (shadow.params.z > 0.5) { texel *= value; }
+    if (POINT_LIGHT) { texel *= value; }
     return select(0.0, 1.0, value <= stored + 1.5 * texel);
 }
 
@@ -101,7 +101,7 @@ fn point_term(v: vec3f, t: f32) -> vec3f {
     let to_p = p - f.light.xyz;
     let d = length(to_p);
     let cos_theta = -dot(to_p, v) / max(d, 1e-30);
-    let ph = phase(f.image.z, f.sigma_s.w, cos_theta);
+    let ph = phase(f.sigma_s.w, cos_theta);
     let pre = f.sigma_s.xyz * f.light_power.xyz;
     let e = select(exp(log(pre) - f.sigma_t.xyz * (d + t)), vec3f(0.0), pre <= vec3f(0.0));
     return ph * lit(p) * e;
@@ -160,7 +160,7 @@ fn march_directional(v: vec3f, t_s: f32, u: f32) -> vec3f {
         let l = exit_distance(p, w, lo, hi);
         sum += lit(p) * exp(-f.sigma_t.xyz * (l + t - span.x));
     }
-    let ph = phase(f.image.z, f.sigma_s.w, dot(w, v));
+    let ph = phase(f.sigma_s.w, dot(w, v));
     return f.sigma_s.xyz * f.light_power.xyz * ph * sum * dt;
 }
 
@@ -172,7 +172,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     var u = 0.5;
     if (march.params.y != 0u) { u = pixel_hash(id.xy); }
     var l = vec3f(0.0);
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         l = march_point(v, t_s, u);
     } else {
         l = march_directional(v, t_s, u);

@@ -37,7 +37,7 @@ fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
     var soft = 1.0;
     if (r > 0.0) { soft = h2 / (h2 + r * r * s * s); }
     // The deflection angle is gamma + psi: the phase of the angle keeps the lobes' peaks exact.
-    return phase_of_angle(f.image.z, f.sigma_s.w, gamma + psi) * exp(-expo) * soft;
+    return phase_of_angle(f.sigma_s.w, gamma + psi) * exp(-expo) * soft;
 }
 
 @compute @workgroup_size(64)

@@ -9,7 +9,8 @@
 
 struct Face {
     view_proj: mat4x4f,
-    // xyz: light position (point) or direction toward the light (directional); w: 1 point, 0 dir.
+    // xyz: light position (point) or direction toward the light (directional); w: 1 point, 0 dir
+    // (informational: the shader takes the light type from the POINT_LIGHT override).
     light: vec4f,
     // Directional: the reference point far on the light's side.
     origin: vec4f,
@@ -32,7 +33,7 @@ fn vs_main(@location(0) position: vec3f, @location(1) albedo: vec3f) -> VsOut {
 
 @fragment
 fn fs_main(i: VsOut) -> @location(0) vec4f {
-    if (face.light.w > 0.5) {
+    if (POINT_LIGHT) {
         return vec4f(length(i.world - face.light.xyz), 0.0, 0.0, 0.0);
     }
     return vec4f(dot(face.origin.xyz - i.world, face.light.xyz), 0.0, 0.0, 0.0);

@@ -58,7 +58,7 @@ fn cube_face(d: vec3f) -> u32 {
 fn visibility(p: vec3f, bias: f32) -> f32 {
     var layer = 0u;
     var value = 0.0;
-    if (shadow.params.z > 0.5) {
+    if (POINT_LIGHT) {
         let d = p - f.light.xyz;
         layer = cube_face(d);
         value = length(d);
@@ -101,7 +101,7 @@ fn fs_main(i: VsOut) -> FsOut {
     var radiance = vec3f(0.0);
     var facing = 0.0;
     let sigma_t = f.sigma_t.xyz;
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         let d = f.light.xyz - i.world;
         let dist = length(d);
         let cos_i = dot(n, d / dist);

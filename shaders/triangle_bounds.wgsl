@@ -202,7 +202,7 @@ fn triangle_z_range(tri: u32) -> vec2f {
         let z = vec3f(dot(p0 - e, fw), dot(p1 - e, fw), dot(p2 - e, fw));
         return vec2f(min(z.x, min(z.y, z.z)), max(z.x, max(z.y, z.z)));
     }
-    if (is_point_light(f)) {
+    if (is_point_light()) {
         let l = f.light.xyz;
         let c = normalize(e - l);
         let r0 = segment_angle_range(l, c, p0, p1);

@@ -143,7 +143,7 @@ fn fs_main(i: VsOut) -> @location(0) vec4f {
             let dp = dot(p - e, f.cam_fwd.xyz);
             let dq = dot(q - e, f.cam_fwd.xyz);
             r = vec2f(min(dp, dq), max(dp, dq));
-        } else if (is_point_light(f)) {
+        } else if (is_point_light()) {
             let l = f.light.xyz;
             r = segment_angle_range(l, normalize(e - l), p, q);
         } else {

@@ -151,6 +151,7 @@ fn panels_exist_and_the_viewport_shows_the_scene() {
     // The stats show GPU time per pass when the adapter has timestamps, and the grid memory.
     assert!(has_label_containing(&h, "grid memory"));
     assert!(has_label_containing(&h, "triangles voxelized"), "no account of the work kept");
+    assert!(has_label_containing(&h, "shaders specialised to: point light"), "no shader variant in the stats");
     assert!(h.state().ed().frame_report().is_some_and(|r| r.result.is_ok()));
 }
 

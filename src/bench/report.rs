@@ -389,6 +389,8 @@ pub fn markdown(r: &BenchResults) -> String {
         }
     }
 
+    paper_section(&mut s, r);
+
     let _ = writeln!(s, "\n## Time per pass (ms, medians)\n");
     let cols = pass_columns(r.rows.iter().map(|x| &x.timing));
     let _ = write!(s, "| method | setting |");
@@ -454,4 +456,43 @@ pub fn markdown(r: &BenchResults) -> String {
         }
     }
     s
+}
+
+/// The paper's stage timings (Section 5, GTX 480, 1024x1024 image, 1024x1024 x 256 grid), beside
+/// ours at the same grid when the sweep has that point.
+pub const PAPER_STAGES_MS: [(&str, &str, f64, f64); 3] = [
+    ("voxelize", "voxelize", 0.5, 2.5),
+    ("scan", "scan (256 bins = 2 x 0.65 ms per 128 bins)", 1.3, 1.3),
+    ("integrate", "integrate", 1.0, 1.0),
+];
+
+fn paper_section(s: &mut String, r: &BenchResults) {
+    let paper_grid = |row: &&Row| {
+        row.point.method_name() == "vsv"
+            && (row.point.grid.planes, row.point.grid.rays, row.point.grid.bins) == (1024, 1024, 256)
+    };
+    let Some(row) = r.rows.iter().find(paper_grid) else { return };
+    let _ = writeln!(
+        s,
+        "\n## Beside the paper\n\nThe paper's stage timings on a GTX 480 (1024x1024 image, 1024x1024 x 256 grid) \
+         against this run's {} grid on {} at {}x{}. The ratio is ours over the paper's (upper end of its range).\n",
+        row.point.setting(),
+        r.adapter,
+        r.width,
+        r.height
+    );
+    let _ = writeln!(s, "| stage | paper ms (GTX 480) | ours ms | ratio |\n|---|---:|---:|---:|");
+    let mut ours_sum = 0.0;
+    for (pass, name, lo, hi) in PAPER_STAGES_MS {
+        let ours = row.timing.passes.iter().find(|p| p.0 == pass).map(|p| p.1).unwrap_or(f64::NAN);
+        ours_sum += if ours.is_finite() { ours } else { 0.0 };
+        let paper = if lo == hi { format!("{lo}") } else { format!("{lo} to {hi}") };
+        let _ = writeln!(s, "| {name} | {paper} | {} | {:.0}x |", ms(ours), ours / hi);
+    }
+    let _ = writeln!(
+        s,
+        "| whole frame | (target: < 1 ms on a current NVIDIA GPU) | {} (stages above: {}) | |",
+        ms(row.timing.total_ms),
+        ms(ours_sum)
+    );
 }

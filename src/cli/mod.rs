@@ -318,7 +318,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
             if let Some(p) = &pruned_z {
                 println!(
                     "work kept{}: planes over {:.1} of 360 deg, rays gamma {:.1}..{:.1} deg, bins z {:.4}..{:.4} (casters {:.4}..{:.4}), \
-                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth), passes: {}",
+                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth), passes: {}, \
+                     shaders specialised to a {}",
                     if p.enabled { "" } else { " (--no-prune)" },
                     p.planes_span_deg,
                     p.rays_gamma_deg[0],
@@ -332,7 +333,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
                     p.triangles_total,
                     p.triangles.culled_view,
                     p.triangles.culled_depth,
-                    p.passes.join(" > ")
+                    p.passes.join(" > "),
+                    p.variant
                 );
             }
         }

@@ -2,10 +2,12 @@
 //! (`shaders/composite.wgsl`); tone mapping for display happens when the image is written.
 
 use super::util::{compute_pipeline, storage_texture_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Composite {
-    pipeline: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipelines: VariantPipelines<wgpu::ComputePipeline>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -25,14 +27,34 @@ impl Composite {
                 storage_texture_entry(4, Self::OUTPUT),
             ],
         });
-        let pipeline = compute_pipeline(device, "Composite::pipeline", &module, &layout);
-        Ok(Composite { pipeline, layout })
+        Ok(Composite { module, pipelines: VariantPipelines::new(Specialised::Light), layout })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, width: u32, height: u32) {
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Composite::pass"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, layout) = (&self.module, &self.layout);
+        self.pipelines.prepare(variant, |c, v| {
+            compute_pipeline(device, &format!("Composite::pipeline{v}"), module, layout, "main", c)
+        });
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
+        bind_group: &wgpu::BindGroup,
+        width: u32,
+        height: u32,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("Composite::pass"),
+            timestamp_writes: None,
+        });
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else {
+            return;
+        };
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
     }

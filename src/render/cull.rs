@@ -4,6 +4,7 @@
 //! draw, and Scan's indirect dispatch is empty when none is kept, so an empty frame costs nothing.
 
 use super::util::{storage_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 /// What the last cull found (read back on demand).
@@ -18,8 +19,10 @@ pub struct CullCounts {
 }
 
 pub struct Cull {
-    cull: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// `cull` and `cull_finish`, per variant.
+    pipelines: VariantPipelines<[wgpu::ComputePipeline; 2]>,
     pub layout: wgpu::BindGroupLayout,
     /// `[kept, culled by depth, culled by view, unused]`.
     pub counters: wgpu::Buffer,
@@ -50,27 +53,21 @@ impl Cull {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(&format!("Cull::{entry}")),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
         let buffer = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC | extra,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC
+                    | extra,
                 mapped_at_creation: false,
             })
         };
         Ok(Cull {
-            cull: pipeline("cull"),
-            finish: pipeline("cull_finish"),
+            module,
+            pipeline_layout: pl,
+            pipelines: VariantPipelines::new(Specialised::Light),
             layout,
             counters: buffer("Cull::counters", 16, wgpu::BufferUsages::empty()),
             draw_args: buffer("Cull::draw_args", 16, wgpu::BufferUsages::INDIRECT),
@@ -78,19 +75,46 @@ impl Cull {
         })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, triangles: u32) {
+    /// Builds the pipelines specialised to `variant` unless they exist.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, pl) = (&self.module, &self.pipeline_layout);
+        self.pipelines.prepare(variant, |constants, v| {
+            ["cull", "cull_finish"].map(|entry| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&format!("Cull::{entry}{v}")),
+                    layout: Some(pl),
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: super::util::options(constants),
+                    cache: None,
+                })
+            })
+        });
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
+        bind_group: &wgpu::BindGroup,
+        triangles: u32,
+    ) {
+        // Renderer::render_frame prepares every variant it records.
+        let Some([cull, finish]) = self.pipelines.get(variant) else {
+            return;
+        };
         for b in [&self.counters, &self.draw_args, &self.scan_args] {
             encoder.clear_buffer(b, 0, None);
         }
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Cull::pass"), timestamp_writes: None });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Cull::pass"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
-        pass.set_pipeline(&self.cull);
+        pass.set_pipeline(cull);
         // Two dimensions past 65535 workgroups (4M triangles).
         let groups = triangles.div_ceil(64).max(1);
         let (gx, gy) = if groups > 65535 { (65535, groups.div_ceil(65535)) } else { (groups, 1) };
         pass.dispatch_workgroups(gx, gy, 1);
-        pass.set_pipeline(&self.finish);
+        pass.set_pipeline(finish);
         pass.dispatch_workgroups(1, 1, 1);
     }
 }

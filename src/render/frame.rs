@@ -6,7 +6,7 @@ use crate::scene::{Aabb, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
 
-pub const FLAG_POINT: u32 = 1;
+// Bit 1 was the point-light flag: the light type is now a pipeline constant (`render::Variant`).
 pub const FLAG_PHI_WRAPS: u32 = 2;
 pub const FLAG_COSINE_BINS: u32 = 4;
 pub const FLAG_CARTESIAN: u32 = 8;
@@ -146,9 +146,6 @@ impl FrameSetup {
             }
         };
         let mut flags = 0;
-        if frame.is_point() {
-            flags |= FLAG_POINT;
-        }
         if mapping.phi_wraps {
             flags |= FLAG_PHI_WRAPS;
         }
@@ -186,7 +183,7 @@ impl FrameSetup {
             medium_min: mb.min.extend(0.0),
             medium_max: mb.max.extend(0.0),
             grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
-            image: UVec4::new(width, height, m.phase.id(), flags),
+            image: UVec4::new(width, height, 0, flags),
             table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
         };
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })

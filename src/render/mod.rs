@@ -17,6 +17,7 @@ mod scene_gpu;
 mod shadow_map;
 mod surface;
 mod util;
+mod variant;
 mod voxelize;
 
 pub use composite::Composite;
@@ -30,6 +31,7 @@ pub use scatter_table::ScatterTable;
 pub use scene_gpu::SceneGpu;
 pub use shadow_map::{FaceUniforms, ShadowMap, ShadowUniforms};
 pub use surface::Surface;
+pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::Voxelize;
 
 use crate::gpu::{GpuContext, GpuError, GpuTimer, PassTiming, ShaderLibrary};
@@ -52,6 +54,8 @@ pub struct RenderOutput {
     pub setup: FrameSetup,
     /// The passes that ran, in order.
     pub passes: Vec<&'static str>,
+    /// The shader variant the passes ran as.
+    pub variant: Variant,
 }
 
 /// What one frame produced on the GPU side (timings and the fitted grid), without images.
@@ -61,6 +65,8 @@ pub struct FrameInfo {
     pub setup: FrameSetup,
     /// The passes that ran, in order (also without timestamps).
     pub passes: Vec<&'static str>,
+    /// The shader variant the passes ran as.
+    pub variant: Variant,
 }
 
 /// What fitting the work to the frame kept (DESIGN section 6), for `--json` and the Stats panel.
@@ -82,12 +88,15 @@ pub struct PruneReport {
     pub triangles: CullCounts,
     /// The passes that ran.
     pub passes: Vec<&'static str>,
+    /// The shader variant they ran as (`point light, henyey-greenstein`): the light type and phase
+    /// function are compiled into the pipelines rather than branched on per pixel.
+    pub variant: String,
 }
 
 impl RenderOutput {
     /// The frame's description without the images.
     pub fn info(&self) -> FrameInfo {
-        FrameInfo { timings: self.timings.clone(), setup: self.setup, passes: self.passes.clone() }
+        FrameInfo { timings: self.timings.clone(), setup: self.setup, passes: self.passes.clone(), variant: self.variant }
     }
 
     pub fn total_ms(&self) -> f64 {
@@ -147,6 +156,24 @@ impl Passes {
             })
         })?
     }
+
+    /// Builds the pipelines specialised to `variant` that are not built yet, in every pass that
+    /// depends on it. Cheap when they exist (a lookup per pass); a new light type or phase function
+    /// costs one pipeline build per pass, once.
+    fn prepare(&mut self, ctx: &GpuContext, variant: Variant) -> Result<(), GpuError> {
+        let d = &ctx.device;
+        ctx.scoped(&format!("creating the pipelines for a {variant}"), || {
+            self.shadow_map.prepare(d, variant);
+            self.surface.prepare(d, variant);
+            self.ranges.prepare(d, variant);
+            self.cull.prepare(d, variant);
+            self.voxelize.prepare(d, variant);
+            self.scatter_table.prepare(d, variant);
+            self.integrate.prepare(d, variant);
+            self.composite.prepare(d, variant);
+            self.raymarch.prepare(d, variant);
+        })
+    }
 }
 
 /// Owns the passes and the resources of the current scene, size and grid.
@@ -168,6 +195,8 @@ pub struct Renderer {
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
     keep_geometry: bool,
+    /// The variant of the last frame, which a reload builds before it replaces the old pipelines.
+    variant: Option<Variant>,
 }
 
 impl Renderer {
@@ -211,13 +240,20 @@ impl Renderer {
             grid: None,
             geometry_copy: None,
             keep_geometry: false,
+            variant: None,
         })
     }
 
     /// Rebuilds every pipeline from `lib` (after a shader edit). On any error — WGSL that does not
     /// parse or validate, or a pipeline wgpu refuses — the old pipelines stay and keep rendering.
     pub fn reload(&mut self, lib: &ShaderLibrary) -> Result<(), GpuError> {
-        self.passes = Passes::new(&self.ctx, lib, self.passes.shadow_map.size)?;
+        let mut passes = Passes::new(&self.ctx, lib, self.passes.shadow_map.size)?;
+        // Build what the current picture needs now, so that a shader wgpu refuses for this variant
+        // fails here, with the old pipelines still in place.
+        if let Some(v) = self.variant {
+            passes.prepare(&self.ctx, v)?;
+        }
+        self.passes = passes;
         self.lib = lib.clone();
         Ok(())
     }
@@ -274,6 +310,7 @@ impl Renderer {
             triangles_total: self.geometry.as_ref().map_or(0, |(g, _)| g.triangle_count),
             triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
             passes: info.passes.clone(),
+            variant: info.variant.to_string(),
         })
     }
 
@@ -362,6 +399,9 @@ impl Renderer {
             }));
         }
         let setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
+        let variant = Variant::new(setup.frame.is_point(), &scene.medium.phase);
+        self.passes.prepare(&self.ctx, variant)?;
+        self.variant = Some(variant);
         let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("ensured above")
         };
@@ -470,27 +510,27 @@ impl Renderer {
             }
         };
         // The frame: an ordered list of passes.
-        self.passes.shadow_map.record(&ctx.queue, &mut enc, scene, geometry);
+        self.passes.shadow_map.record(&ctx.queue, &mut enc, variant, scene, geometry);
         mark(&mut enc, "shadow_map");
-        self.passes.surface.record(&mut enc, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
+        self.passes.surface.record(&mut enc, variant, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
         mark(&mut enc, "surface");
         if let Method::Raymarch { steps, jitter } = method {
-            self.passes.raymarch.record(&ctx.queue, &mut enc, &raymarch_bg, width, height, steps, jitter);
+            self.passes.raymarch.record(&ctx.queue, &mut enc, variant, &raymarch_bg, width, height, steps, jitter);
             mark(&mut enc, "raymarch");
         } else if !scene.needs_scattering() {
             // Nothing scatters: no voxel pass has anything to compute; Integrate writes zeros.
             enc.clear_buffer(&g.bits, 0, None);
-            self.passes.integrate.record(&mut enc, &integrate_bg, width, height);
+            self.passes.integrate.record(&mut enc, variant, &integrate_bg, width, height);
             mark(&mut enc, "integrate");
         } else {
             if self.prune {
-                self.passes.ranges.record(&mut enc, &ranges_bg, &self.frame_buffer, width, height);
+                self.passes.ranges.record(&mut enc, variant, &ranges_bg, &self.frame_buffer, width, height);
                 mark(&mut enc, "ranges");
             }
-            self.passes.cull.record(&mut enc, &cull_bg, geometry.triangle_count);
+            self.passes.cull.record(&mut enc, variant, &cull_bg, geometry.triangle_count);
             mark(&mut enc, "cull");
             enc.clear_buffer(&g.bits, 0, None);
-            self.passes.voxelize.record(&mut enc, &voxelize_bg, &g.dummy, &self.passes.cull.draw_args);
+            self.passes.voxelize.record(&mut enc, variant, &voxelize_bg, &g.dummy, &self.passes.cull.draw_args);
             mark(&mut enc, "voxelize");
             if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                 enc.copy_buffer_to_buffer(&g.bits, 0, copy, 0, g.bits.size());
@@ -498,13 +538,13 @@ impl Renderer {
             self.passes.scan.record(&mut enc, &scan_bg, &self.passes.cull.scan_args);
             mark(&mut enc, "scan");
             if scene.light.is_point() && method == Method::Vsv {
-                self.passes.scatter_table.record(&mut enc, &table_bg);
+                self.passes.scatter_table.record(&mut enc, variant, &table_bg);
                 mark(&mut enc, "scatter_table");
             }
-            self.passes.integrate.record(&mut enc, &integrate_bg, width, height);
+            self.passes.integrate.record(&mut enc, variant, &integrate_bg, width, height);
             mark(&mut enc, "integrate");
         }
-        self.passes.composite.record(&mut enc, &composite_bg, width, height);
+        self.passes.composite.record(&mut enc, variant, &composite_bg, width, height);
         mark(&mut enc, "composite");
         if let Some(tm) = timer.as_ref() {
             tm.resolve(&mut enc);
@@ -516,12 +556,12 @@ impl Renderer {
         };
         self.timer = timer;
 
-        Ok(FrameInfo { timings, setup, passes: ran })
+        Ok(FrameInfo { timings, setup, passes: ran, variant })
     }
 
     /// Renders one frame and reads the final and the scattered image back to the CPU.
     pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
-        let FrameInfo { timings, setup, passes } = self.render_frame(scene, width, height, method)?;
+        let FrameInfo { timings, setup, passes, variant } = self.render_frame(scene, width, height, method)?;
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
             let mut img = Image::new(width, height);
@@ -532,7 +572,7 @@ impl Renderer {
         };
         let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
         let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
-        Ok(RenderOutput { hdr, scatter, timings, setup, passes })
+        Ok(RenderOutput { hdr, scatter, timings, setup, passes, variant })
     }
 
     /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the

@@ -3,11 +3,14 @@
 //! into the frame uniforms before voxelization, so far-away geometry does not dilute the bins.
 
 use super::util::{storage_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Ranges {
-    reduce: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// `reduce` and `finish`, per variant.
+    pipelines: VariantPipelines<[wgpu::ComputePipeline; 2]>,
     pub layout: wgpu::BindGroupLayout,
     /// `[max visible z, z_lo, z_hi, unused]` as float bits.
     pub result: wgpu::Buffer,
@@ -32,42 +35,56 @@ impl Ranges {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(&format!("Ranges::{entry}")),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
         let result = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Ranges::result"),
             size: 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Ranges { reduce: pipeline("reduce"), finish: pipeline("finish"), layout, result })
+        Ok(Ranges { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout, result })
     }
 
     /// Reduces, then copies `[z_lo, z_hi]` into `frame_uniforms`.
+    /// Builds the pipelines specialised to `variant` unless they exist.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, pl) = (&self.module, &self.pipeline_layout);
+        self.pipelines.prepare(variant, |constants, v| {
+            ["reduce", "finish"].map(|entry| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&format!("Ranges::{entry}{v}")),
+                    layout: Some(pl),
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: super::util::options(constants),
+                    cache: None,
+                })
+            })
+        });
+    }
+
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
         bind_group: &wgpu::BindGroup,
         frame_uniforms: &wgpu::Buffer,
         width: u32,
         height: u32,
     ) {
+        // Renderer::render_frame prepares every variant it records.
+        let Some([reduce, finish]) = self.pipelines.get(variant) else {
+            return;
+        };
         encoder.clear_buffer(&self.result, 0, None);
         {
-            let mut pass =
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Ranges::pass"), timestamp_writes: None });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("Ranges::pass"),
+                timestamp_writes: None,
+            });
             pass.set_bind_group(0, bind_group, &[]);
-            pass.set_pipeline(&self.reduce);
+            pass.set_pipeline(reduce);
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
-            pass.set_pipeline(&self.finish);
+            pass.set_pipeline(finish);
             pass.dispatch_workgroups(1, 1, 1);
         }
         encoder.copy_buffer_to_buffer(&self.result, 4, frame_uniforms, Self::UNIFORM_OFFSET, 8);

@@ -15,6 +15,7 @@
 //! reference's angle variable (see the shader's header), so the march converges to the reference.
 
 use super::util::{compute_pipeline, storage_texture_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use bytemuck::{Pod, Zeroable};
 use glam::UVec4;
@@ -28,7 +29,8 @@ pub struct RaymarchUniforms {
 }
 
 pub struct Raymarch {
-    pipeline: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipelines: VariantPipelines<wgpu::ComputePipeline>,
     pub layout: wgpu::BindGroupLayout,
     /// Steps and jitter of the next frame, written by [`Raymarch::record`].
     pub uniforms: wgpu::Buffer,
@@ -54,14 +56,21 @@ impl Raymarch {
                 uniform_entry(5, c),
             ],
         });
-        let pipeline = compute_pipeline(device, "Raymarch::pipeline", &module, &layout);
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Raymarch::uniforms"),
             size: std::mem::size_of::<RaymarchUniforms>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Raymarch { pipeline, layout, uniforms })
+        Ok(Raymarch { module, pipelines: VariantPipelines::new(Specialised::LightAndPhase), layout, uniforms })
+    }
+
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, layout) = (&self.module, &self.layout);
+        self.pipelines.prepare(variant, |c, v| {
+            compute_pipeline(device, &format!("Raymarch::pipeline{v}"), module, layout, "main", c)
+        });
     }
 
     /// Records the march of every pixel. `steps` is clamped to `1..=MAX_STEPS`.
@@ -70,6 +79,7 @@ impl Raymarch {
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
         bind_group: &wgpu::BindGroup,
         width: u32,
         height: u32,
@@ -79,9 +89,13 @@ impl Raymarch {
         let u = RaymarchUniforms { params: UVec4::new(steps.clamp(1, Self::MAX_STEPS), jitter as u32, 0, 0) };
         // Queue writes land before the submission that carries this encoder.
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Raymarch::pass"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Raymarch::pass"), timestamp_writes: None });
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else {
+            return;
+        };
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
     }

@@ -19,13 +19,14 @@ impl Scan {
                 storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout);
+        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout, "main", &[]);
         Ok(Scan { pipeline, layout })
     }
 
     /// `args`: the Cull pass's DispatchIndirect arguments (no workgroups when nothing was kept).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, args: &wgpu::Buffer) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups_indirect(args, 0);

@@ -8,10 +8,12 @@
 
 use super::frame::{TABLE_COLS, TABLE_ROWS};
 use super::util::{compute_pipeline, storage_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct ScatterTable {
-    pipeline: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipelines: VariantPipelines<wgpu::ComputePipeline>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -28,14 +30,27 @@ impl ScatterTable {
                 storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let pipeline = compute_pipeline(device, "ScatterTable::pipeline", &module, &layout);
-        Ok(ScatterTable { pipeline, layout })
+        Ok(ScatterTable { module, pipelines: VariantPipelines::new(Specialised::LightAndPhase), layout })
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup) {
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("ScatterTable::pass"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, layout) = (&self.module, &self.layout);
+        self.pipelines.prepare(variant, |c, v| {
+            compute_pipeline(device, &format!("ScatterTable::pipeline{v}"), module, layout, "main", c)
+        });
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, bind_group: &wgpu::BindGroup) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("ScatterTable::pass"),
+            timestamp_writes: None,
+        });
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else {
+            return;
+        };
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(TABLE_ROWS.div_ceil(64), 1, 1);
     }

@@ -6,6 +6,7 @@
 
 use super::scene_gpu::SceneGpu;
 use super::util::{scene_vertex_layout, texture_2d, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use crate::params::Light;
 use crate::scene::Scene;
@@ -27,14 +28,15 @@ pub struct FaceUniforms {
 pub struct ShadowUniforms {
     pub view_proj: [Mat4; 6],
     /// x: texels per side, y: texel size (directional: scene units; point: per unit distance),
-    /// z: 1 point / 0 directional.
+    /// z: 1 point / 0 directional (informational: shaders take the light type from `Variant`).
     pub params: Vec4,
     pub origin: Vec4,
 }
 
 pub struct ShadowMap {
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: VariantPipelines<wgpu::RenderPipeline>,
     pub size: u32,
     /// R32Float, six layers.
     pub map: wgpu::Texture,
@@ -56,33 +58,6 @@ impl ShadowMap {
             label: Some("ShadowMap::pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("ShadowMap::pipeline"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(scene_vertex_layout())],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(Self::FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
         });
         let map = texture_2d(
             device,
@@ -123,7 +98,50 @@ impl ShadowMap {
                 (buf, bg)
             })
             .collect();
-        Ok(ShadowMap { pipeline, layout, size, map, map_view, depth, faces })
+        Ok(ShadowMap {
+            module,
+            pipeline_layout: pl,
+            pipelines: VariantPipelines::new(Specialised::Light),
+            size,
+            map,
+            map_view,
+            depth,
+            faces,
+        })
+    }
+
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, pl) = (&self.module, &self.pipeline_layout);
+        self.pipelines.prepare(variant, |constants, v| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(&format!("ShadowMap::pipeline{v}")),
+                layout: Some(pl),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: super::util::options(constants),
+                    buffers: &[Some(scene_vertex_layout())],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: super::util::options(constants),
+                    targets: &[Some(Self::FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        });
     }
 
     /// The faces' matrices for this scene's light, and the lookup uniforms for the surface pass.
@@ -179,7 +197,16 @@ impl ShadowMap {
         (faces, lookup, count)
     }
 
-    pub fn record(&self, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder, scene: &Scene, geometry: &SceneGpu) {
+    pub fn record(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
+        scene: &Scene,
+        geometry: &SceneGpu,
+    ) {
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else { return };
         let (faces, _, count) = self.uniforms(scene);
         for (i, face) in faces.iter().enumerate().take(count) {
             queue.write_buffer(&self.faces[i].0, 0, bytemuck::bytes_of(face));
@@ -211,12 +238,11 @@ impl ShadowMap {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.faces[i].1, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
             pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..geometry.index_count, 0, 0..1);
         }
-        let _ = &self.layout;
     }
 }

@@ -6,10 +6,13 @@
 
 use super::scene_gpu::SceneGpu;
 use super::util::{scene_vertex_layout, texture_entry, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Surface {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: VariantPipelines<wgpu::RenderPipeline>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -34,45 +37,57 @@ impl Surface {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("Surface::pipeline"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(scene_vertex_layout())],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: Self::DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(Self::RADIANCE.into()), Some(Self::DISTANCE.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
+        Ok(Surface { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout })
+    }
+
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, pl) = (&self.module, &self.pipeline_layout);
+        self.pipelines.prepare(variant, |constants, v| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(&format!("Surface::pipeline{v}")),
+                layout: Some(pl),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: super::util::options(constants),
+                    buffers: &[Some(scene_vertex_layout())],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: Self::DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: super::util::options(constants),
+                    targets: &[Some(Self::RADIANCE.into()), Some(Self::DISTANCE.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         });
-        Ok(Surface { pipeline, layout })
     }
 
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
         bind_group: &wgpu::BindGroup,
         geometry: &SceneGpu,
         radiance: &wgpu::TextureView,
         distance: &wgpu::TextureView,
         depth: &wgpu::TextureView,
     ) {
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else {
+            return;
+        };
         let color = |view, clear: f64| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -97,7 +112,7 @@ impl Surface {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);

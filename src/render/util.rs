@@ -26,7 +26,11 @@ pub fn storage_entry(binding: u32, visibility: wgpu::ShaderStages, read_only: bo
     }
 }
 
-pub fn texture_entry(binding: u32, visibility: wgpu::ShaderStages, dim: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
+pub fn texture_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    dim: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -73,12 +77,19 @@ pub fn texture_2d(
     })
 }
 
-/// A compute pipeline with one bind group.
+/// Compilation options carrying the WGSL `override` values of a [`super::Variant`].
+pub fn options<'a>(constants: &'a [(&'a str, f64)]) -> wgpu::PipelineCompilationOptions<'a> {
+    wgpu::PipelineCompilationOptions { constants, ..Default::default() }
+}
+
+/// A compute pipeline with one bind group, entry point `entry`, specialised by `constants`.
 pub fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     module: &wgpu::ShaderModule,
     layout: &wgpu::BindGroupLayout,
+    entry: &str,
+    constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
     let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -89,8 +100,8 @@ pub fn compute_pipeline(
         label: Some(label),
         layout: Some(&pl),
         module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
+        entry_point: Some(entry),
+        compilation_options: options(constants),
         cache: None,
     })
 }

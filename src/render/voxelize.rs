@@ -8,10 +8,13 @@
 //! stands in.
 
 use super::util::{storage_entry, texture_2d, uniform_entry};
+use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Voxelize {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: VariantPipelines<wgpu::RenderPipeline>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -37,46 +40,66 @@ impl Voxelize {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("Voxelize::pipeline"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: Self::DUMMY,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::empty(),
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
+        Ok(Voxelize { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout })
+    }
+
+    /// Builds the pipeline specialised to `variant` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (module, pl) = (&self.module, &self.pipeline_layout);
+        self.pipelines.prepare(variant, |constants, v| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(&format!("Voxelize::pipeline{v}")),
+                layout: Some(pl),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: super::util::options(constants),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: super::util::options(constants),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: Self::DUMMY,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::empty(),
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         });
-        Ok(Voxelize { pipeline, layout })
     }
 
     /// The stand-in attachment, `planes x rays`.
     pub fn dummy_target(device: &wgpu::Device, planes: u32, rays: u32) -> wgpu::Texture {
-        texture_2d(device, "Voxelize::dummy_target", planes, rays, 1, Self::DUMMY, wgpu::TextureUsages::RENDER_ATTACHMENT)
+        texture_2d(
+            device,
+            "Voxelize::dummy_target",
+            planes,
+            rays,
+            1,
+            Self::DUMMY,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
     }
 
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
         bind_group: &wgpu::BindGroup,
         dummy: &wgpu::TextureView,
         draw_args: &wgpu::Buffer,
     ) {
+        // Renderer::render_frame prepares every variant it records.
+        let Some(pipeline) = self.pipelines.get(variant) else {
+            return;
+        };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("Voxelize::pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -90,7 +113,7 @@ impl Voxelize {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         // The Cull pass wrote the vertex count: 12 per kept triangle.
         pass.draw_indirect(draw_args, 0);

@@ -59,7 +59,7 @@ pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
 /// Lines from the renderer's own account of what it kept and dropped.
 pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
     let unit = if point_light { "°" } else { " unit" };
-    let mut v = vec![format!("passes: {}", p.passes.join(" › "))];
+    let mut v = vec![format!("passes: {}", p.passes.join(" › ")), format!("shaders specialised to: {}", p.variant)];
     if !p.passes.contains(&"voxelize") {
         v.push("no grid this frame".into());
         return v;

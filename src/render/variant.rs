@@ -1,0 +1,191 @@
+//! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type or
+//! the phase function builds one pipeline per combination a frame actually uses, with the WGSL
+//! pipeline-overridable constants `POINT_LIGHT` and `PHASE` (`shaders/common.wgsl`) set. The shader
+//! compiler then folds the branches on them away when it builds the pipeline, instead of every pixel
+//! taking them at run time.
+//!
+//! Pipelines are built on first use ([`VariantPipelines::prepare`], called by
+//! `Renderer::render_frame` before it records) and kept, so switching the phase function in the
+//! editor costs one pipeline build per pass the first time and nothing after.
+
+use crate::params::Phase;
+use std::fmt;
+
+/// What a pipeline is specialised to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Variant {
+    /// Point light (else directional). For the Cartesian grid this is always `false`.
+    pub point_light: bool,
+    /// [`Phase::id`].
+    pub phase: u32,
+}
+
+impl Variant {
+    pub fn new(point_light: bool, phase: &Phase) -> Variant {
+        Variant { point_light, phase: phase.id() }
+    }
+
+    /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
+    /// `common.wgsl`, which declares both, so the names always exist.
+    pub fn constants(&self) -> [(&'static str, f64); 2] {
+        [("POINT_LIGHT", if self.point_light { 1.0 } else { 0.0 }), ("PHASE", self.phase as f64)]
+    }
+
+    /// The phase function's file name (`henyey-greenstein`).
+    pub fn phase_name(&self) -> &'static str {
+        Phase::KINDS.get(self.phase as usize).copied().unwrap_or("unknown")
+    }
+}
+
+impl fmt::Display for Variant {
+    /// `point light, henyey-greenstein`
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let light = if self.point_light { "point light" } else { "directional light" };
+        write!(f, "{light}, {}", self.phase_name())
+    }
+}
+
+/// Which of a [`Variant`]'s parts a pass's shader reads: passes that never evaluate the phase
+/// function share one pipeline across all of them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Specialised {
+    Light,
+    LightAndPhase,
+}
+
+/// A pass's pipelines (or groups of pipelines, `P`), one per variant in use.
+pub struct VariantPipelines<P> {
+    reads: Specialised,
+    built: Vec<(Variant, P)>,
+}
+
+impl<P> VariantPipelines<P> {
+    pub fn new(reads: Specialised) -> VariantPipelines<P> {
+        VariantPipelines { reads, built: Vec::new() }
+    }
+
+    /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
+    pub fn key(&self, v: Variant) -> Variant {
+        match self.reads {
+            Specialised::Light => Variant { phase: 0, ..v },
+            Specialised::LightAndPhase => v,
+        }
+    }
+
+    /// Builds the pipeline for `v` unless it exists. `build` gets the constants and a label suffix
+    /// (`[point light, schlick]`).
+    pub fn prepare(&mut self, v: Variant, build: impl FnOnce(&[(&str, f64)], &str) -> P) {
+        let key = self.key(v);
+        if self.get(v).is_none() {
+            let label = match self.reads {
+                Specialised::Light if key.point_light => "[point light]".to_string(),
+                Specialised::Light => "[directional light]".to_string(),
+                Specialised::LightAndPhase => format!("[{key}]"),
+            };
+            let p = build(&key.constants(), &label);
+            self.built.push((key, p));
+        }
+    }
+
+    /// The pipeline for `v`, if [`VariantPipelines::prepare`] built it.
+    pub fn get(&self, v: Variant) -> Option<&P> {
+        let key = self.key(v);
+        self.built.iter().find(|(k, _)| *k == key).map(|(_, p)| p)
+    }
+
+    /// The variants built so far.
+    pub fn variants(&self) -> impl Iterator<Item = Variant> + '_ {
+        self.built.iter().map(|(k, _)| *k)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::ShaderLibrary;
+
+    /// Every shader, specialised to every variant the renderer can ask for, still validates: naga
+    /// substitutes the constants (as wgpu does when it builds a pipeline) and re-validates the
+    /// result. This is what catches an override used in a way only some values allow.
+    #[test]
+    fn every_shader_specialises_to_every_variant() {
+        let lib = ShaderLibrary::embedded();
+        let phases = [
+            Phase::Isotropic,
+            Phase::HenyeyGreenstein { g: 0.5 },
+            Phase::Schlick { g: 0.5 },
+            Phase::CornetteShanks { g: 0.5 },
+            Phase::Rayleigh,
+        ];
+        let mut specialised = 0;
+        for file in crate::gpu::EMBEDDED.iter().map(|(name, _)| *name) {
+            if file == "common.wgsl" || file == "triangle_bounds.wgsl" {
+                continue; // declarations only, validated through their users
+            }
+            let (module, _) = lib.validate(file).unwrap_or_else(|e| panic!("{e}"));
+            if module.overrides.is_empty() {
+                continue;
+            }
+            let info =
+                naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+                    .validate(&module)
+                    .unwrap_or_else(|e| panic!("{file}: {e}"));
+            for point_light in [true, false] {
+                for phase in &phases {
+                    let v = Variant::new(point_light, phase);
+                    let constants: naga::back::PipelineConstants =
+                        v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
+                    for ep in &module.entry_points {
+                        naga::back::pipeline_constants::process_overrides(
+                            &module,
+                            &info,
+                            Some((ep.stage, ep.name.as_str())),
+                            &constants,
+                        )
+                        .unwrap_or_else(|e| panic!("{file}:{} specialised to {v}: {e}", ep.name));
+                    }
+                }
+            }
+            specialised += 1;
+        }
+        // The passes that depend on the light or the phase (everything but the editor's display).
+        assert!(specialised >= 9, "only {specialised} shaders declare the overrides");
+    }
+
+    /// The light type and the phase function reach the shaders only as the override constants: no
+    /// shader reads them from the per-frame uniforms (where they would be a run-time branch).
+    #[test]
+    fn no_shader_branches_on_the_light_or_phase_at_run_time() {
+        for (file, src) in crate::gpu::EMBEDDED {
+            let code: String = src.lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n");
+            assert!(!code.contains("image.z"), "{file} reads the phase id from the uniforms");
+            assert!(!code.contains("FLAG_POINT"), "{file} reads the light type from the uniforms");
+            assert!(!code.contains("light.w"), "{file} tells the light type by the light vector's w");
+            assert!(!code.contains("params.z"), "{file} tells the light type by the shadow lookup's params.z");
+        }
+        let common = crate::gpu::EMBEDDED.iter().find(|(f, _)| *f == "common.wgsl").map(|(_, s)| *s).unwrap_or("");
+        assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
+    }
+
+    #[test]
+    fn light_only_passes_share_a_pipeline_across_phases() {
+        let mut p = VariantPipelines::new(Specialised::Light);
+        let mut builds = 0;
+        for phase in [Phase::Isotropic, Phase::Rayleigh, Phase::HenyeyGreenstein { g: 0.3 }] {
+            p.prepare(Variant::new(true, &phase), |_, _| builds += 1);
+        }
+        assert_eq!(builds, 1);
+        p.prepare(Variant::new(false, &Phase::Rayleigh), |c, label| {
+            assert_eq!(c[0], ("POINT_LIGHT", 0.0));
+            assert_eq!(label, "[directional light]");
+        });
+        assert_eq!(p.variants().count(), 2);
+
+        let mut q = VariantPipelines::new(Specialised::LightAndPhase);
+        for phase in [Phase::Isotropic, Phase::Rayleigh, Phase::Rayleigh] {
+            q.prepare(Variant::new(true, &phase), |c, _| assert_eq!(c[1].1, phase.id() as f64));
+        }
+        assert_eq!(q.variants().count(), 2);
+        assert!(q.get(Variant::new(true, &Phase::Schlick { g: 0.1 })).is_none());
+    }
+}
