@@ -108,7 +108,12 @@ fn gamma_of_ray(f: Frame, y: f32) -> f32 {
 fn bin_coord(f: Frame, z: f32) -> f32 {
     let b = f32(f.grid.z);
     if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
-        return (cos(f.ranges.z) - cos(z)) / (cos(f.ranges.z) - cos(f.ranges.w)) * b;
+        // (cos z_lo - cos z) / (cos z_lo - cos z_hi) as products of sines: the plain form is 0/0
+        // in f32 once the range is below ~3e-4 rad (src/epipolar.rs has the same).
+        let lo = f.ranges.z;
+        let num = sin(0.5 * (lo + z)) * sin(0.5 * (z - lo));
+        let den = sin(0.5 * (lo + f.ranges.w)) * sin(0.5 * (f.ranges.w - lo));
+        return num / max(den, 1e-30) * b;
     }
     return (z - f.ranges.z) / (f.ranges.w - f.ranges.z) * b;
 }
@@ -116,8 +121,13 @@ fn bin_coord(f: Frame, z: f32) -> f32 {
 fn z_of_bin(f: Frame, k: f32) -> f32 {
     let s = k / f32(f.grid.z);
     if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
-        let c0 = cos(f.ranges.z);
-        return acos(clamp(c0 - s * (c0 - cos(f.ranges.w)), -1.0, 1.0));
+        // cos z = cos z_lo - s (cos z_lo - cos z_hi), solved for sin^2 and cos^2 of z / 2 and put
+        // back together with atan2: precise at both ends, where cos is flat (src/epipolar.rs).
+        let lo = f.ranges.z;
+        let p = s * sin(0.5 * (lo + f.ranges.w)) * sin(0.5 * (f.ranges.w - lo));
+        let sh = sin(0.5 * lo);
+        let ch = cos(0.5 * lo);
+        return 2.0 * atan2(sqrt(max(sh * sh + p, 0.0)), sqrt(max(ch * ch - p, 0.0)));
     }
     return f.ranges.z + s * (f.ranges.w - f.ranges.z);
 }

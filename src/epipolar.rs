@@ -279,8 +279,12 @@ impl GridMapping {
         let b = self.grid.bins as f64;
         match self.spacing {
             BinSpacing::UniformAngle => (z - self.z_lo) / (self.z_hi - self.z_lo) * b,
+            // (cos z_lo - cos z) / (cos z_lo - cos z_hi) with both differences as products of
+            // sines: the plain form is 0/0 in f32 once the range is below ~3e-4 rad.
             BinSpacing::UniformCosine => {
-                (self.z_lo.cos() - z.cos()) / (self.z_lo.cos() - self.z_hi.cos()) * b
+                let num = (0.5 * (self.z_lo + z)).sin() * (0.5 * (z - self.z_lo)).sin();
+                let den = (0.5 * (self.z_lo + self.z_hi)).sin() * (0.5 * (self.z_hi - self.z_lo)).sin();
+                num / den.max(f64::MIN_POSITIVE) * b
             }
         }
     }
@@ -288,8 +292,15 @@ impl GridMapping {
         let s = k / self.grid.bins as f64;
         match self.spacing {
             BinSpacing::UniformAngle => self.z_lo + s * (self.z_hi - self.z_lo),
+            // cos z = cos z_lo - s (cos z_lo - cos z_hi), solved for sin^2(z / 2) and cos^2(z / 2)
+            // and put back together with atan2, which keeps the precision at both ends where cos
+            // is flat (z near 0 and near pi; acos and asin lose half the digits there).
             BinSpacing::UniformCosine => {
-                (self.z_lo.cos() - s * (self.z_lo.cos() - self.z_hi.cos())).clamp(-1.0, 1.0).acos()
+                let p = s * (0.5 * (self.z_lo + self.z_hi)).sin() * (0.5 * (self.z_hi - self.z_lo)).sin();
+                let (sh, ch) = (0.5 * self.z_lo).sin_cos();
+                let sin2 = (sh * sh + p).max(0.0);
+                let cos2 = (ch * ch - p).max(0.0);
+                2.0 * sin2.sqrt().atan2(cos2.sqrt())
             }
         }
     }
@@ -325,6 +336,35 @@ pub fn caster_z_range(frame: &EpipolarFrame, b: &Aabb) -> (f64, f64) {
 mod tests {
     use super::*;
     use glam::Vec3;
+
+    /// Cosine bins over a range too narrow for cos to resolve (a far point light, psi < 3e-4 rad in
+    /// f32 and < 1e-8 in f64) map and invert without 0/0: the sine-product forms keep it exact.
+    #[test]
+    fn cosine_bins_survive_ranges_cos_cannot_resolve() {
+        for (lo, hi) in [(0.0, 1e-9), (0.2, 0.2 + 1e-9), (1e-6, 3e-6), (0.1, 2.9)] {
+            let m = GridMapping {
+                grid: Grid { planes: 8, rays: 8, bins: 64, spacing: BinSpacing::UniformCosine },
+                phi0: 0.0,
+                phi_span: std::f64::consts::TAU,
+                phi_wraps: true,
+                gamma_lo: 0.1,
+                gamma_hi: 1.0,
+                z_lo: lo,
+                z_hi: hi,
+                spacing: BinSpacing::UniformCosine,
+            };
+            for k in [0.0, 1.0, 17.5, 63.0, 64.0] {
+                let z = m.z_of_bin(k);
+                assert!(z.is_finite() && z >= lo * (1.0 - 1e-12) && z <= hi * (1.0 + 1e-12), "{lo}..{hi}: bin {k} -> z {z}");
+                let back = m.bin_coord(z);
+                assert!((back - k).abs() < 1e-3, "{lo}..{hi}: bin {k} -> z {z} -> bin {back}");
+            }
+            // The middle of the range in cos, not in angle, for a wide range.
+            let mid = m.z_of_bin(32.0);
+            let want = (0.5 * (lo.cos() + hi.cos())).acos();
+            assert!((mid - want).abs() <= 1e-9 * (1.0 + want) || hi - lo < 1e-4, "{mid} vs {want}");
+        }
+    }
 
     fn frames() -> Vec<(&'static str, EpipolarFrame)> {
         let eye = DVec3::new(0.3, 1.2, 4.0);

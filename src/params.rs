@@ -38,12 +38,14 @@ pub enum ParamError {
 }
 
 impl Spec {
-    /// Checks one value against the range.
+    /// Checks one value against the range. The bounds are met to f32 precision: parameters are
+    /// stored as f32, and `0.999f32` (0.99900001) must pass a documented maximum of 0.999.
     pub fn check(&self, value: f64) -> Result<(), ParamError> {
         if !value.is_finite() {
             return Err(ParamError::NotFinite { name: self.name, value });
         }
-        if value < self.min || value > self.max {
+        let slack = f32::EPSILON as f64 * self.min.abs().max(self.max.abs()).max(1.0);
+        if value < self.min - slack || value > self.max + slack {
             return Err(ParamError::OutOfRange {
                 name: self.name,
                 value,
@@ -96,6 +98,26 @@ impl Phase {
         doc: "Asymmetry of the lobe: negative scatters back toward the light, positive forward.",
     };
 
+    /// `g` of Schlick's approximation: its `k = 1.55 g - 0.55 g^3` passes 1 in magnitude at
+    /// |g| = 0.938, beyond which `(1 - k^2) / (1 - k cos)^2` is negative with a pole, so the range
+    /// stops short of that.
+    pub const SCHLICK_G: Spec = Spec {
+        name: "g",
+        unit: "",
+        min: -0.93,
+        max: 0.93,
+        doc: "Asymmetry of Schlick's lobe: negative scatters back toward the light, positive forward \
+              (|g| <= 0.93, where the approximation stays a positive function).",
+    };
+
+    /// The range of this kind's `g` ([`Phase::G`], or [`Phase::SCHLICK_G`] for Schlick).
+    pub fn g_spec(&self) -> &'static Spec {
+        match self {
+            Phase::Schlick { .. } => &Self::SCHLICK_G,
+            _ => &Self::G,
+        }
+    }
+
     /// All kinds, in UI order, with their file names.
     pub const KINDS: [&'static str; 5] =
         ["isotropic", "henyey-greenstein", "schlick", "cornette-shanks", "rayleigh"];
@@ -144,9 +166,9 @@ impl Phase {
         }
     }
 
-    /// Checks `g` against its range.
+    /// Checks `g` against its kind's range.
     pub fn validate(&self) -> Result<(), ParamError> {
-        Self::G.check(self.g() as f64)
+        self.g_spec().check(self.g() as f64)
     }
 }
 
@@ -456,6 +478,24 @@ impl Default for Exposure {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Schlick's range stops where the approximation stays positive; the documented maximum of
+    /// every range is accepted in the f32 the parameters are stored in.
+    #[test]
+    fn schlick_range_keeps_the_phase_positive_and_bounds_pass_in_f32() {
+        let edge = Phase::Schlick { g: Phase::SCHLICK_G.max as f32 };
+        assert!(edge.validate().is_ok());
+        for i in 0..=2000 {
+            let c = -1.0 + i as f64 / 1000.0;
+            assert!(edge.eval(c) > 0.0 && Phase::Schlick { g: -0.93 }.eval(c) > 0.0, "negative at cos {c}");
+        }
+        assert!(Phase::Schlick { g: 0.95 }.validate().is_err());
+        assert!(Phase::Schlick { g: 0.95 }.eval(0.0) < 0.0, "the refused range is indeed negative");
+        assert!(Phase::HenyeyGreenstein { g: 0.95 }.validate().is_ok());
+        assert!(Phase::HenyeyGreenstein { g: 0.999 }.validate().is_ok(), "0.999f32 = 0.99900001");
+        assert!(Phase::HenyeyGreenstein { g: -0.999 }.validate().is_ok());
+        assert!(Phase::HenyeyGreenstein { g: 0.9991 }.validate().is_err());
+    }
 
     /// Integrates a phase function over the sphere with a midpoint rule in cos(theta).
     fn sphere_integral(p: &Phase) -> f64 {

@@ -31,9 +31,8 @@ fn asymmetry() -> impl Strategy<Value = f32> {
     ]
 }
 
-/// Every phase function. Schlick only for |g| <= 0.9: KNOWN LIMITATION (reported, src/params.rs):
-/// its `k = 1.55 g - 0.55 g^3` exceeds 1 in magnitude for |g| > 0.93 (k(0.969) = 1.0016), and then
-/// `(1 - k^2) / (1 - k c)^2` is negative everywhere with a pole inside [-1, 1], in f32 and f64 alike.
+/// Every phase function, each over its valid range (Schlick's, `Phase::SCHLICK_G`, stops at |g| = 0.93:
+/// beyond 0.938 its `k = 1.55 g - 0.55 g^3` exceeds 1 and the function turns negative; 0.9 here).
 fn phase() -> impl Strategy<Value = Phase> {
     prop_oneof![
         Just(Phase::Isotropic),

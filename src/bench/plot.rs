@@ -80,6 +80,38 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     lo / pad..hi * pad
 }
 
+/// Labelled ticks of a log axis: decades, plus 2 and 5 (or every integer multiple) when the range
+/// spans few decades. plotters labels only whole decades, which leaves an axis spanning less than
+/// one (1 200 to 6 700 ms) without a single label.
+fn log_ticks(r: &std::ops::Range<f64>) -> (Vec<f64>, Vec<f64>) {
+    let decades = (r.end / r.start).log10();
+    let bold: &[f64] = if decades <= 1.2 {
+        &[1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+    } else if decades <= 3.5 {
+        &[1.0, 2.0, 5.0]
+    } else {
+        &[1.0]
+    };
+    let (mut ticks, mut light) = (Vec::new(), Vec::new());
+    let mut e = r.start.log10().floor() as i32;
+    while 10f64.powi(e) <= r.end {
+        for m in 1..10 {
+            let x = m as f64 * 10f64.powi(e);
+            if x >= r.start && x <= r.end {
+                light.push(x);
+            }
+        }
+        for m in bold {
+            let x = m * 10f64.powi(e);
+            if x >= r.start && x <= r.end {
+                ticks.push(x);
+            }
+        }
+        e += 1;
+    }
+    (ticks, light)
+}
+
 /// Draws `plot` as a `width x height` PNG at `path`.
 pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), BenchError> {
     let err = |e: String| BenchError::Plot { path: path.to_path_buf(), message: e };
@@ -98,7 +130,10 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
         } else {
             builder.x_label_area_size(8).y_label_area_size(8);
         }
-        let mut chart = builder.build_cartesian_2d(xr.log_scale(), yr.log_scale()).map_err(|e| err(e.to_string()))?;
+        let ((xt, xl), (yt, yl)) = (log_ticks(&xr), log_ticks(&yr));
+        let x_axis = xr.log_scale().with_key_points(xt).with_light_points(xl);
+        let y_axis = yr.log_scale().with_key_points(yt).with_light_points(yl);
+        let mut chart = builder.build_cartesian_2d(x_axis, y_axis).map_err(|e| err(e.to_string()))?;
         let mut mesh = chart.configure_mesh();
         mesh.light_line_style(RGBColor(242, 242, 242));
         if text {
@@ -172,5 +207,26 @@ fn short(v: f64) -> String {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
         format!("{v:.0e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-9 * y.abs())
+    }
+
+    /// Every log axis gets labels, also one spanning less than a decade.
+    #[test]
+    fn log_axes_are_labelled_within_a_decade_and_across_many() {
+        let (t, _) = log_ticks(&(1200.0..6700.0));
+        assert!(close(&t, &[1500.0, 2000.0, 3000.0, 4000.0, 5000.0, 6000.0]), "{t:?}");
+        let (t, light) = log_ticks(&(0.03..2.0));
+        assert!(close(&t, &[0.05, 0.1, 0.2, 0.5, 1.0, 2.0]), "{t:?}");
+        assert!(light.len() > t.len());
+        let (t, _) = log_ticks(&(0.5..2.0e5));
+        assert!(close(&t, &[1.0, 10.0, 100.0, 1e3, 1e4, 1e5]), "{t:?}");
     }
 }

@@ -130,8 +130,11 @@ fn methods(rows: &[Row]) -> Vec<&'static str> {
 
 /// (total_ms, rel_rmse) of one method's rows, and their Pareto front.
 fn curve(rows: &[Row], method: &str) -> (Vec<(f64, f64)>, Vec<bool>) {
-    let pts: Vec<(f64, f64)> =
-        rows.iter().filter(|r| r.point.method_name() == method).map(|r| (r.timing.total_ms, r.scatter.rel_rmse)).collect();
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.point.method_name() == method)
+        .map(|r| (r.timing.total_ms, r.scatter.rel_rmse))
+        .collect();
     let front = pareto_front(&pts);
     (pts, front)
 }
@@ -192,43 +195,43 @@ pub fn write_all(r: &BenchResults, dir: &Path) -> Result<Vec<PathBuf>, BenchErro
         .collect();
     let title = format!("{}: error against time, {}x{}", r.scene, r.width, r.height);
     plot::draw(
-        &Plot {
-            title: &title,
-            x_desc: "GPU time per frame (ms)",
-            y_desc: "relative RMSE of scattered light",
-            series,
-        },
+        &Plot { title: &title, x_desc: "GPU time per frame (ms)", y_desc: "relative RMSE of scattered light", series },
         &err_png,
         900,
         640,
     )?;
     files.push(err_png);
-    let title = format!("time against triangles (procedural rooms, {}x{})", r.width, r.height);
-    plot::draw(
-        &Plot {
-            title: &title,
-            x_desc: "triangles",
-            y_desc: "GPU time per frame (ms)",
-            series: scaling_series(&r.triangle_rows, |x| x.triangles as f64),
-        },
-        &tri_png,
-        900,
-        640,
-    )?;
-    files.push(tri_png);
-    let title = format!("{}: time against resolution", r.scene);
-    plot::draw(
-        &Plot {
-            title: &title,
-            x_desc: "pixels per side (square images)",
-            y_desc: "GPU time per frame (ms)",
-            series: scaling_series(&r.resolution_rows, |x| x.width as f64),
-        },
-        &res_png,
-        900,
-        640,
-    )?;
-    files.push(res_png);
+    // The scaling plots only when their sweeps ran (not with --no-scaling): no empty charts.
+    if !r.triangle_rows.is_empty() {
+        let title = format!("time against triangles (procedural rooms, {}x{})", r.width, r.height);
+        plot::draw(
+            &Plot {
+                title: &title,
+                x_desc: "triangles",
+                y_desc: "GPU time per frame (ms)",
+                series: scaling_series(&r.triangle_rows, |x| x.triangles as f64),
+            },
+            &tri_png,
+            900,
+            640,
+        )?;
+        files.push(tri_png);
+    }
+    if !r.resolution_rows.is_empty() {
+        let title = format!("{}: time against resolution", r.scene);
+        plot::draw(
+            &Plot {
+                title: &title,
+                x_desc: "pixels per side (square images)",
+                y_desc: "GPU time per frame (ms)",
+                series: scaling_series(&r.resolution_rows, |x| x.width as f64),
+            },
+            &res_png,
+            900,
+            640,
+        )?;
+        files.push(res_png);
+    }
     write_markdown(r, dir)?;
     files.push(md);
     Ok(files)
@@ -256,7 +259,12 @@ pub fn machine() -> String {
     // Other work on the machine slows a software rasterizer down: say how busy it was.
     let load = std::fs::read_to_string("/proc/loadavg")
         .ok()
-        .map(|l| format!("; load average {} (1, 5, 15 min) when the report was written", l.split_whitespace().take(3).collect::<Vec<_>>().join(" ")))
+        .map(|l| {
+            format!(
+                "; load average {} (1, 5, 15 min) when the report was written",
+                l.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+            )
+        })
         .unwrap_or_default();
     format!("{model}: {logical} logical CPUs in /proc/cpuinfo{cores}, {usable} usable by this process{mem}{load}")
 }
@@ -338,7 +346,10 @@ pub fn markdown(r: &BenchResults) -> String {
          `scatter_reference.png`{}.\n",
         methods(&r.rows).iter().map(|m| format!(", `scatter_{m}.png`")).collect::<String>()
     );
-    let _ = writeln!(s, "| method | setting | total ms | volume ms | rel RMSE | max abs | PSNR dB | final rel RMSE | front |");
+    let _ = writeln!(
+        s,
+        "| method | setting | total ms | volume ms | rel RMSE | max abs | PSNR dB | final rel RMSE | front |"
+    );
     let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|:-:|");
     for m in methods(&r.rows) {
         let (_, front) = curve(&r.rows, m);
@@ -370,7 +381,8 @@ pub fn markdown(r: &BenchResults) -> String {
                  needs for the same error, interpolated in log-log along its front (≤: the raymarch's fastest point is \
                  already that accurate; —: no raymarch point in the sweep is).\n"
             );
-            let _ = writeln!(s, "| {m} setting | rel RMSE | {m} ms | raymarch ms | speed-up |\n|---|---:|---:|---:|---:|");
+            let _ =
+                writeln!(s, "| {m} setting | rel RMSE | {m} ms | raymarch ms | speed-up |\n|---|---:|---:|---:|---:|");
             let (pts, front) = curve(&r.rows, m);
             let rows: Vec<&Row> = r.rows.iter().filter(|x| x.point.method_name() == *m).collect();
             for ((row, p), f) in rows.iter().zip(pts).zip(front) {
@@ -412,14 +424,19 @@ pub fn markdown(r: &BenchResults) -> String {
     }
 
     for (title, png, rows, what) in [
-        ("Time against triangles", "time_vs_triangles.png", &r.triangle_rows, "procedural rooms of 64 spheres, point light"),
+        (
+            "Time against triangles",
+            "time_vs_triangles.png",
+            &r.triangle_rows,
+            "procedural rooms of 64 spheres, point light",
+        ),
         ("Time against resolution", "time_vs_resolution.png", &r.resolution_rows, "this scene, square images"),
     ] {
-        let _ = writeln!(s, "\n## {title}\n\n![{title}]({png})\n\n{what}.\n");
         if rows.is_empty() {
-            let _ = writeln!(s, "Not run.");
+            let _ = writeln!(s, "\n## {title}\n\nNot run (--no-scaling).");
             continue;
         }
+        let _ = writeln!(s, "\n## {title}\n\n![{title}]({png})\n\n{what}.\n");
         let cols = pass_columns(rows.iter().map(|x| &x.timing));
         let _ = write!(s, "| method | setting | triangles | image | total ms |");
         for c in &cols {

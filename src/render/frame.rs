@@ -69,7 +69,7 @@ pub enum FrameError {
     #[error("the eye sits exactly on the point light; move one of them")]
     EyeOnLight,
     #[error(
-        "the Cartesian method needs a directional light along the camera's x or y axis (it is {off_deg:.2} degrees          off the nearest, {name}); for this camera use --light-dir {suggest}"
+        "the Cartesian method needs a directional light along the camera's x or y axis (it is {off_deg:.2} degrees off the nearest, {name}); for this camera use --light-dir {suggest}"
     )]
     NotAxisAligned { off_deg: f64, name: &'static str, suggest: String },
     #[error("the Cartesian method needs a directional light; use --light-dir or --method vsv")]

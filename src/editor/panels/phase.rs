@@ -37,13 +37,16 @@ impl PhasePanel {
             }
         });
         // Keep the asymmetry when switching between lobed kinds; a fresh lobe starts mildly forward.
+        // (clamped into the new kind's range: Schlick's is narrower).
         let g_now = if has_g(&phase) { phase.g() } else { 0.3 };
         if kind != phase.id() as usize {
-            out.push(Command::SetMedium(Medium { phase: phase_of_kind(kind, g_now), ..*m }, None));
+            let spec = phase_of_kind(kind, g_now).g_spec();
+            let g = (g_now as f64).clamp(spec.min, spec.max) as f32;
+            out.push(Command::SetMedium(Medium { phase: phase_of_kind(kind, g), ..*m }, None));
         }
         if has_g(&phase) {
             let mut g = phase.g();
-            let (r, k) = spec_slider(ui, &mut g, &Phase::G, "g (asymmetry)");
+            let (r, k) = spec_slider(ui, &mut g, phase.g_spec(), "g (asymmetry)");
             if r.changed() {
                 out.push(Command::SetMedium(Medium { phase: phase_of_kind(kind, g), ..*m }, k));
             }
