@@ -3,7 +3,7 @@
 //! ray, or outside the bins' z range is dropped; the kept ones are listed for Voxelize's indirect
 //! draw, and Scan's indirect dispatch is empty when none is kept, so an empty frame costs nothing.
 
-use super::util::{storage_entry, uniform_entry};
+use super::util::{compute_entry_points, storage_entry, uniform_entry};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
@@ -79,16 +79,7 @@ impl Cull {
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
         let (module, pl) = (&self.module, &self.pipeline_layout);
         self.pipelines.prepare(variant, |constants, v| {
-            ["cull", "cull_finish"].map(|entry| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&format!("Cull::{entry}{v}")),
-                    layout: Some(pl),
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: super::util::options(constants),
-                    cache: None,
-                })
-            })
+            compute_entry_points(device, "Cull", v, module, pl, ["cull", "cull_finish"], constants)
         });
     }
 

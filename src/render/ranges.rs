@@ -2,7 +2,7 @@
 //! `z_hi = min(casters' z_hi, max over pixels of the surface's z)`, computed on the GPU and copied
 //! into the frame uniforms before voxelization, so far-away geometry does not dilute the bins.
 
-use super::util::{storage_entry, texture_entry, uniform_entry};
+use super::util::{compute_entry_points, storage_entry, texture_entry, uniform_entry};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
@@ -44,24 +44,15 @@ impl Ranges {
         Ok(Ranges { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout, result })
     }
 
-    /// Reduces, then copies `[z_lo, z_hi]` into `frame_uniforms`.
     /// Builds the pipelines specialised to `variant` unless they exist.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
         let (module, pl) = (&self.module, &self.pipeline_layout);
         self.pipelines.prepare(variant, |constants, v| {
-            ["reduce", "finish"].map(|entry| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(&format!("Ranges::{entry}{v}")),
-                    layout: Some(pl),
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: super::util::options(constants),
-                    cache: None,
-                })
-            })
+            compute_entry_points(device, "Ranges", v, module, pl, ["reduce", "finish"], constants)
         });
     }
 
+    /// Reduces, then copies `[z_lo, z_hi]` into `frame_uniforms`.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -106,6 +106,29 @@ pub fn compute_pipeline(
     })
 }
 
+/// One compute pipeline per entry point of `module`, sharing the pipeline layout `layout`, all
+/// specialised by `constants`; labelled `{pass}::{entry}{suffix}`.
+pub fn compute_entry_points<const N: usize>(
+    device: &wgpu::Device,
+    pass: &str,
+    suffix: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entries: [&str; N],
+    constants: &[(&str, f64)],
+) -> [wgpu::ComputePipeline; N] {
+    entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&format!("{pass}::{entry}{suffix}")),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: options(constants),
+            cache: None,
+        })
+    })
+}
+
 /// Vertex layout of the scene's vertex buffer: position and albedo, both `vec3<f32>`.
 pub const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
