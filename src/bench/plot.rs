@@ -112,6 +112,45 @@ fn log_ticks(r: &std::ops::Range<f64>) -> (Vec<f64>, Vec<f64>) {
     (ticks, light)
 }
 
+/// The corner the curves leave most empty, for the legend: every curve sampled along its segments
+/// in the plot's log coordinates and counted in a box of 40% x 22% of the area at each corner and
+/// at the middle of each side (ties: the corners first, upper right first).
+fn legend_corner(series: &[Series], xr: &std::ops::Range<f64>, yr: &std::ops::Range<f64>) -> SeriesLabelPosition {
+    let norm = |v: f64, r: &std::ops::Range<f64>| (v.ln() - r.start.ln()) / (r.end.ln() - r.start.ln());
+    // Candidate boxes in order of preference: (position, x range, y range), y upward.
+    let boxes = [
+        (SeriesLabelPosition::UpperRight, (0.6, 1.0), (0.78, 1.0)),
+        (SeriesLabelPosition::UpperLeft, (0.0, 0.4), (0.78, 1.0)),
+        (SeriesLabelPosition::LowerRight, (0.6, 1.0), (0.0, 0.22)),
+        (SeriesLabelPosition::LowerLeft, (0.0, 0.4), (0.0, 0.22)),
+        (SeriesLabelPosition::MiddleRight, (0.6, 1.0), (0.39, 0.61)),
+        (SeriesLabelPosition::MiddleLeft, (0.0, 0.4), (0.39, 0.61)),
+    ];
+    let mut counts = [0usize; 6];
+    for s in series {
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
+            .map(|p| (norm(p.0, xr), norm(p.1, yr)))
+            .collect();
+        let mut samples = pts.clone();
+        for w in pts.windows(2) {
+            samples.extend((1..16).map(|k| {
+                let t = k as f64 / 16.0;
+                (w[0].0 + t * (w[1].0 - w[0].0), w[0].1 + t * (w[1].1 - w[0].1))
+            }));
+        }
+        for (x, y) in samples {
+            for (c, (_, bx, by)) in counts.iter_mut().zip(&boxes) {
+                *c += (x >= bx.0 && x <= bx.1 && y >= by.0 && y <= by.1) as usize;
+            }
+        }
+    }
+    let best = (0..boxes.len()).min_by_key(|&i| (counts[i], i)).unwrap_or(0);
+    boxes[best].0.clone()
+}
+
 /// Draws `plot` as a `width x height` PNG at `path`.
 pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), BenchError> {
     let err = |e: String| BenchError::Plot { path: path.to_path_buf(), message: e };
@@ -131,8 +170,8 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
             builder.x_label_area_size(8).y_label_area_size(8);
         }
         let ((xt, xl), (yt, yl)) = (log_ticks(&xr), log_ticks(&yr));
-        let x_axis = xr.log_scale().with_key_points(xt).with_light_points(xl);
-        let y_axis = yr.log_scale().with_key_points(yt).with_light_points(yl);
+        let x_axis = xr.clone().log_scale().with_key_points(xt).with_light_points(xl);
+        let y_axis = yr.clone().log_scale().with_key_points(yt).with_light_points(yl);
         let mut chart = builder.build_cartesian_2d(x_axis, y_axis).map_err(|e| err(e.to_string()))?;
         let mut mesh = chart.configure_mesh();
         mesh.light_line_style(RGBColor(242, 242, 242));
@@ -184,7 +223,7 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 14))
-                .position(SeriesLabelPosition::UpperRight)
+                .position(legend_corner(&plot.series, &xr, &yr))
                 .draw()
                 .map_err(|e| err(e.to_string()))?;
         }
