@@ -1,13 +1,12 @@
 //! Composite: `L_pixel = L_surface * T_view + L_scatter` in linear radiance
 //! (`shaders/composite.wgsl`); tone mapping for display happens when the image is written.
 
-use super::util::{compute_pipeline, storage_texture_entry, texture_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_texture_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Composite {
-    module: wgpu::ShaderModule,
-    pipelines: VariantPipelines<wgpu::ComputePipeline>,
+    pipelines: SpecialisedCompute<1>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -27,15 +26,12 @@ impl Composite {
                 storage_texture_entry(4, Self::OUTPUT),
             ],
         });
-        Ok(Composite { module, pipelines: VariantPipelines::new(Specialised::Light), layout })
+        Ok(Composite { pipelines: SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light), layout })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, layout) = (&self.module, &self.layout);
-        self.pipelines.prepare(variant, |c, v| {
-            compute_pipeline(device, &format!("Composite::pipeline{v}"), module, layout, "main", c)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     pub fn record(
@@ -51,7 +47,7 @@ impl Composite {
             timestamp_writes: None,
         });
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
+        let Some([pipeline]) = self.pipelines.get(variant) else {
             return;
         };
         pass.set_pipeline(pipeline);

@@ -3,8 +3,8 @@
 //! ray, or outside the bins' z range is dropped; the kept ones are listed for Voxelize's indirect
 //! draw, and Scan's indirect dispatch is empty when none is kept, so an empty frame costs nothing.
 
-use super::util::{compute_entry_points, storage_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 /// What the last cull found (read back on demand).
@@ -19,10 +19,7 @@ pub struct CullCounts {
 }
 
 pub struct Cull {
-    module: wgpu::ShaderModule,
-    pipeline_layout: wgpu::PipelineLayout,
-    /// `cull` and `cull_finish`, per variant.
-    pipelines: VariantPipelines<[wgpu::ComputePipeline; 2]>,
+    pipelines: SpecialisedCompute<2>,
     pub layout: wgpu::BindGroupLayout,
     /// `[kept, culled by depth, culled by view, unused]`.
     pub counters: wgpu::Buffer,
@@ -48,11 +45,6 @@ impl Cull {
                 storage_entry(6, c, false),
             ],
         });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("Cull::pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
         let buffer = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -65,9 +57,7 @@ impl Cull {
             })
         };
         Ok(Cull {
-            module,
-            pipeline_layout: pl,
-            pipelines: VariantPipelines::new(Specialised::Light),
+            pipelines: SpecialisedCompute::new(device, "Cull", module, &layout, ["cull", "cull_finish"], Specialised::Light),
             layout,
             counters: buffer("Cull::counters", 16, wgpu::BufferUsages::empty()),
             draw_args: buffer("Cull::draw_args", 16, wgpu::BufferUsages::INDIRECT),
@@ -77,10 +67,7 @@ impl Cull {
 
     /// Builds the pipelines specialised to `variant` unless they exist.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, pl) = (&self.module, &self.pipeline_layout);
-        self.pipelines.prepare(variant, |constants, v| {
-            compute_entry_points(device, "Cull", v, module, pl, ["cull", "cull_finish"], constants)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     pub fn record(

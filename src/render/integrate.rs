@@ -3,13 +3,12 @@
 //! scatter table; directional light: the closed-form integral of `exp(-sigma_t (l + m))` over
 //! piecewise-linear path lengths. Bilinear over the four grid rays around the pixel.
 
-use super::util::{compute_pipeline, storage_entry, storage_texture_entry, texture_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_entry, storage_texture_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Integrate {
-    module: wgpu::ShaderModule,
-    pipelines: VariantPipelines<wgpu::ComputePipeline>,
+    pipelines: SpecialisedCompute<1>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -28,15 +27,12 @@ impl Integrate {
                 storage_texture_entry(4, Self::OUTPUT),
             ],
         });
-        Ok(Integrate { module, pipelines: VariantPipelines::new(Specialised::LightAndPhase), layout })
+        Ok(Integrate { pipelines: SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightAndPhase), layout })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, layout) = (&self.module, &self.layout);
-        self.pipelines.prepare(variant, |c, v| {
-            compute_pipeline(device, &format!("Integrate::pipeline{v}"), module, layout, "main", c)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     pub fn record(
@@ -52,7 +48,7 @@ impl Integrate {
             timestamp_writes: None,
         });
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
+        let Some([pipeline]) = self.pipelines.get(variant) else {
             return;
         };
         pass.set_pipeline(pipeline);

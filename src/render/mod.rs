@@ -195,7 +195,8 @@ pub struct Renderer {
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
     keep_geometry: bool,
-    /// The variant of the last frame, which a reload builds before it replaces the old pipelines.
+    /// The variant of the last frame: every pass holds its pipelines (a reload or a new shadow map
+    /// builds them before replacing the old ones), so frames of the same variant build nothing.
     variant: Option<Variant>,
 }
 
@@ -276,7 +277,13 @@ impl Renderer {
             });
         }
         self.ctx.check_texture("the shadow map", size, size)?;
-        let map = self.ctx.scoped("creating the shadow map", || ShadowMap::new(&self.ctx.device, &self.lib, size))??;
+        let map = self.ctx.scoped("creating the shadow map", || -> Result<ShadowMap, GpuError> {
+            let mut map = ShadowMap::new(&self.ctx.device, &self.lib, size)?;
+            if let Some(v) = self.variant {
+                map.prepare(&self.ctx.device, v);
+            }
+            Ok(map)
+        })??;
         self.passes.shadow_map = map;
         Ok(())
     }
@@ -400,8 +407,12 @@ impl Renderer {
         }
         let setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
         let variant = Variant::new(setup.frame.is_point(), &scene.medium.phase);
-        self.passes.prepare(&self.ctx, variant)?;
-        self.variant = Some(variant);
+        // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
+        // only a new light type or phase function builds, and checks, anything.
+        if self.variant != Some(variant) {
+            self.passes.prepare(&self.ctx, variant)?;
+            self.variant = Some(variant);
+        }
         let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("ensured above")
         };

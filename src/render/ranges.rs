@@ -2,15 +2,12 @@
 //! `z_hi = min(casters' z_hi, max over pixels of the surface's z)`, computed on the GPU and copied
 //! into the frame uniforms before voxelization, so far-away geometry does not dilute the bins.
 
-use super::util::{compute_entry_points, storage_entry, texture_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Ranges {
-    module: wgpu::ShaderModule,
-    pipeline_layout: wgpu::PipelineLayout,
-    /// `reduce` and `finish`, per variant.
-    pipelines: VariantPipelines<[wgpu::ComputePipeline; 2]>,
+    pipelines: SpecialisedCompute<2>,
     pub layout: wgpu::BindGroupLayout,
     /// `[max visible z, z_lo, z_hi, unused]` as float bits.
     pub result: wgpu::Buffer,
@@ -30,26 +27,18 @@ impl Ranges {
                 storage_entry(2, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("Ranges::pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
         let result = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Ranges::result"),
             size: 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Ranges { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout, result })
+        Ok(Ranges { pipelines: SpecialisedCompute::new(device, "Ranges", module, &layout, ["reduce", "finish"], Specialised::Light), layout, result })
     }
 
     /// Builds the pipelines specialised to `variant` unless they exist.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, pl) = (&self.module, &self.pipeline_layout);
-        self.pipelines.prepare(variant, |constants, v| {
-            compute_entry_points(device, "Ranges", v, module, pl, ["reduce", "finish"], constants)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     /// Reduces, then copies `[z_lo, z_hi]` into `frame_uniforms`.

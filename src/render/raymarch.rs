@@ -14,8 +14,8 @@
 //! the scene's box and `max(steps / 4, 4)` more cover the rest of the ray out to infinity in the
 //! reference's angle variable (see the shader's header), so the march converges to the reference.
 
-use super::util::{compute_pipeline, storage_texture_entry, texture_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_texture_entry, texture_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 use bytemuck::{Pod, Zeroable};
 use glam::UVec4;
@@ -29,8 +29,7 @@ pub struct RaymarchUniforms {
 }
 
 pub struct Raymarch {
-    module: wgpu::ShaderModule,
-    pipelines: VariantPipelines<wgpu::ComputePipeline>,
+    pipelines: SpecialisedCompute<1>,
     pub layout: wgpu::BindGroupLayout,
     /// Steps and jitter of the next frame, written by [`Raymarch::record`].
     pub uniforms: wgpu::Buffer,
@@ -62,15 +61,12 @@ impl Raymarch {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Raymarch { module, pipelines: VariantPipelines::new(Specialised::LightAndPhase), layout, uniforms })
+        Ok(Raymarch { pipelines: SpecialisedCompute::new(device, "Raymarch", module, &layout, ["main"], Specialised::LightAndPhase), layout, uniforms })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, layout) = (&self.module, &self.layout);
-        self.pipelines.prepare(variant, |c, v| {
-            compute_pipeline(device, &format!("Raymarch::pipeline{v}"), module, layout, "main", c)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     /// Records the march of every pixel. `steps` is clamped to `1..=MAX_STEPS`.
@@ -92,7 +88,7 @@ impl Raymarch {
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Raymarch::pass"), timestamp_writes: None });
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
+        let Some([pipeline]) = self.pipelines.get(variant) else {
             return;
         };
         pass.set_pipeline(pipeline);

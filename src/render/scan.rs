@@ -19,7 +19,7 @@ impl Scan {
                 storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout, "main", &[]);
+        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout);
         Ok(Scan { pipeline, layout })
     }
 

@@ -7,13 +7,12 @@
 //! so that a lit run `[psi_a, psi_b]` contributes `sigma_s I0 / h (G(psi_b) - G(psi_a))`.
 
 use super::frame::{TABLE_COLS, TABLE_ROWS};
-use super::util::{compute_pipeline, storage_entry, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct ScatterTable {
-    module: wgpu::ShaderModule,
-    pipelines: VariantPipelines<wgpu::ComputePipeline>,
+    pipelines: SpecialisedCompute<1>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -30,15 +29,12 @@ impl ScatterTable {
                 storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        Ok(ScatterTable { module, pipelines: VariantPipelines::new(Specialised::LightAndPhase), layout })
+        Ok(ScatterTable { pipelines: SpecialisedCompute::new(device, "ScatterTable", module, &layout, ["main"], Specialised::LightAndPhase), layout })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, layout) = (&self.module, &self.layout);
-        self.pipelines.prepare(variant, |c, v| {
-            compute_pipeline(device, &format!("ScatterTable::pipeline{v}"), module, layout, "main", c)
-        });
+        self.pipelines.prepare(device, variant);
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, bind_group: &wgpu::BindGroup) {
@@ -47,7 +43,7 @@ impl ScatterTable {
             timestamp_writes: None,
         });
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
+        let Some([pipeline]) = self.pipelines.get(variant) else {
             return;
         };
         pass.set_pipeline(pipeline);

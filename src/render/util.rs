@@ -82,14 +82,13 @@ pub fn options<'a>(constants: &'a [(&'a str, f64)]) -> wgpu::PipelineCompilation
     wgpu::PipelineCompilationOptions { constants, ..Default::default() }
 }
 
-/// A compute pipeline with one bind group, entry point `entry`, specialised by `constants`.
+/// An unspecialised compute pipeline with one bind group and entry point `main` (the passes whose
+/// shaders read neither the light type nor the phase; the others use `variant::SpecialisedCompute`).
 pub fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     module: &wgpu::ShaderModule,
     layout: &wgpu::BindGroupLayout,
-    entry: &str,
-    constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
     let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -100,32 +99,9 @@ pub fn compute_pipeline(
         label: Some(label),
         layout: Some(&pl),
         module,
-        entry_point: Some(entry),
-        compilation_options: options(constants),
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
         cache: None,
-    })
-}
-
-/// One compute pipeline per entry point of `module`, sharing the pipeline layout `layout`, all
-/// specialised by `constants`; labelled `{pass}::{entry}{suffix}`.
-pub fn compute_entry_points<const N: usize>(
-    device: &wgpu::Device,
-    pass: &str,
-    suffix: &str,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
-    entries: [&str; N],
-    constants: &[(&str, f64)],
-) -> [wgpu::ComputePipeline; N] {
-    entries.map(|entry| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(&format!("{pass}::{entry}{suffix}")),
-            layout: Some(layout),
-            module,
-            entry_point: Some(entry),
-            compilation_options: options(constants),
-            cache: None,
-        })
     })
 }
 

@@ -99,6 +99,56 @@ impl<P> VariantPipelines<P> {
     }
 }
 
+/// A compute pass's specialised pipelines: one pipeline per entry point (`N` of them, sharing one
+/// bind-group layout) and per variant in use, labelled `Pass::entry[variant]`.
+pub struct SpecialisedCompute<const N: usize> {
+    pass: &'static str,
+    entries: [&'static str; N],
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    pipelines: VariantPipelines<[wgpu::ComputePipeline; N]>,
+}
+
+impl<const N: usize> SpecialisedCompute<N> {
+    pub fn new(
+        device: &wgpu::Device,
+        pass: &'static str,
+        module: wgpu::ShaderModule,
+        bind_group_layout: &wgpu::BindGroupLayout,
+        entries: [&'static str; N],
+        reads: Specialised,
+    ) -> Self {
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&format!("{pass}::pipeline_layout")),
+            bind_group_layouts: &[Some(bind_group_layout)],
+            immediate_size: 0,
+        });
+        SpecialisedCompute { pass, entries, module, layout, pipelines: VariantPipelines::new(reads) }
+    }
+
+    /// Builds the pipelines specialised to `variant` unless they exist.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        let (pass, entries, module, layout) = (self.pass, self.entries, &self.module, &self.layout);
+        self.pipelines.prepare(variant, |constants, suffix| {
+            entries.map(|entry| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&format!("{pass}::{entry}{suffix}")),
+                    layout: Some(layout),
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: super::util::options(constants),
+                    cache: None,
+                })
+            })
+        });
+    }
+
+    /// The pipelines for `variant`, one per entry point, if [`SpecialisedCompute::prepare`] built them.
+    pub fn get(&self, variant: Variant) -> Option<&[wgpu::ComputePipeline; N]> {
+        self.pipelines.get(variant)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
