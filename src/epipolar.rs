@@ -355,7 +355,10 @@ mod tests {
             };
             for k in [0.0, 1.0, 17.5, 63.0, 64.0] {
                 let z = m.z_of_bin(k);
-                assert!(z.is_finite() && z >= lo * (1.0 - 1e-12) && z <= hi * (1.0 + 1e-12), "{lo}..{hi}: bin {k} -> z {z}");
+                assert!(
+                    z.is_finite() && z >= lo * (1.0 - 1e-12) && z <= hi * (1.0 + 1e-12),
+                    "{lo}..{hi}: bin {k} -> z {z}"
+                );
                 let back = m.bin_coord(z);
                 assert!((back - k).abs() < 1e-3, "{lo}..{hi}: bin {k} -> z {z} -> bin {back}");
             }

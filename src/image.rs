@@ -37,44 +37,22 @@ pub enum ImageError {
     /// The OpenEXR encoder or decoder failed (for reading: not an EXR file, corrupt, or no
     /// R, G and B channels).
     #[error("cannot {op} OpenEXR file {}: {message}", path.display())]
-    Exr {
-        op: &'static str,
-        path: PathBuf,
-        message: String,
-    },
+    Exr { op: &'static str, path: PathBuf, message: String },
     /// The PNG encoder failed.
     #[error("cannot {op} PNG file {}: {message}", path.display())]
-    Png {
-        op: &'static str,
-        path: PathBuf,
-        message: String,
-    },
+    Png { op: &'static str, path: PathBuf, message: String },
     /// Raw pixel data whose length does not fit the stated size.
     #[error(
         "pixel data for a {width}x{height} image needs {expected} values \
          ({channels} per pixel), got {actual}"
     )]
-    SizeMismatch {
-        width: u32,
-        height: u32,
-        channels: usize,
-        expected: usize,
-        actual: usize,
-    },
+    SizeMismatch { width: u32, height: u32, channels: usize, expected: usize, actual: usize },
     /// An image file whose size cannot be held in memory (width or height beyond `u32`).
     #[error("{}: a {width}x{height} image is too large", path.display())]
-    TooLarge {
-        path: PathBuf,
-        width: u64,
-        height: u64,
-    },
+    TooLarge { path: PathBuf, width: u64, height: u64 },
     /// Writing an image without pixels: neither format can store one.
     #[error("cannot write {}: the image is {width}x{height}, an image file needs at least one pixel", path.display())]
-    Empty {
-        path: PathBuf,
-        width: u32,
-        height: u32,
-    },
+    Empty { path: PathBuf, width: u32, height: u32 },
 }
 
 /// A linear RGB image, row 0 at the top.
@@ -88,11 +66,7 @@ pub struct Image {
 impl Image {
     /// A black image.
     pub fn new(width: u32, height: u32) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; width as usize * height as usize],
-        }
+        Image { width, height, pixels: vec![[0.0; 3]; width as usize * height as usize] }
     }
 
     /// An image from tightly packed RGBA `f32` data (4 values per pixel, row 0 first), as read
@@ -110,20 +84,12 @@ impl Image {
             });
         }
         let pixels = data.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
-        Ok(Image {
-            width,
-            height,
-            pixels,
-        })
+        Ok(Image { width, height, pixels })
     }
 
     /// An image from RGB pixels, row 0 first. Fails when `pixels.len()` is not
     /// `width * height`.
-    pub fn from_pixels(
-        width: u32,
-        height: u32,
-        pixels: Vec<[f32; 3]>,
-    ) -> Result<Image, ImageError> {
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<[f32; 3]>) -> Result<Image, ImageError> {
         let expected = pixel_count(width, height);
         if expected != Some(pixels.len()) {
             return Err(ImageError::SizeMismatch {
@@ -134,11 +100,7 @@ impl Image {
                 actual: pixels.len(),
             });
         }
-        Ok(Image {
-            width,
-            height,
-            pixels,
-        })
+        Ok(Image { width, height, pixels })
     }
 
     /// The pixel at column `x`, row `y` (row 0 at the top).
@@ -159,12 +121,7 @@ impl Image {
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside a {}x{} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside a {}x{} image", self.width, self.height);
         y as usize * self.width as usize + x as usize
     }
 
@@ -186,11 +143,7 @@ impl Image {
 
     /// The number of non-finite values (NaN or ±infinity), counting each channel separately.
     pub fn count_non_finite(&self) -> usize {
-        self.pixels
-            .iter()
-            .flat_map(|p| p.iter())
-            .filter(|v| !v.is_finite())
-            .count()
+        self.pixels.iter().flat_map(|p| p.iter()).filter(|v| !v.is_finite()).count()
     }
 
     /// Writes the image as a float32 RGB OpenEXR file (ZIP compression, lossless), atomically.
@@ -203,14 +156,8 @@ impl Image {
             let p = self.pixels[y * w + x];
             (p[0], p[1], p[2])
         });
-        let image =
-            exr::image::Image::from_encoded_channels((w, h), Encoding::SMALL_LOSSLESS, channels);
-        write_atomic(path, |file| {
-            image
-                .write()
-                .to_buffered(file)
-                .map_err(|e| exr_error("write", path, e))
-        })
+        let image = exr::image::Image::from_encoded_channels((w, h), Encoding::SMALL_LOSSLESS, channels);
+        write_atomic(path, |file| image.write().to_buffered(file).map_err(|e| exr_error("write", path, e)))
     }
 
     /// Reads the first RGB(A) layer of an OpenEXR file at its largest resolution level.
@@ -219,11 +166,7 @@ impl Image {
         use exr::prelude::*;
         let path = path.as_ref();
         // Open the file ourselves so that a missing file is reported as an I/O error.
-        let file = File::open(path).map_err(|source| ImageError::Io {
-            op: "read",
-            path: path.into(),
-            source,
-        })?;
+        let file = File::open(path).map_err(|source| ImageError::Io { op: "read", path: path.into(), source })?;
         let reader = io::BufReader::new(file);
         let result = read()
             .no_deep_data()
@@ -237,9 +180,7 @@ impl Image {
                     px.resize(n, [0.0f32; 3]);
                     Some((size.0, px))
                 },
-                |pixels: &mut Option<(usize, Vec<[f32; 3]>)>,
-                 pos: Vec2<usize>,
-                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                |pixels: &mut Option<(usize, Vec<[f32; 3]>)>, pos: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
                     if let Some((w, px)) = pixels {
                         px[pos.1 * *w + pos.0] = [r, g, b];
                     }
@@ -251,19 +192,11 @@ impl Image {
             .map_err(|e| exr_error("read", path, e))?;
         let layer = result.layer_data;
         let size = layer.size;
-        let too_large = || ImageError::TooLarge {
-            path: path.into(),
-            width: size.0 as u64,
-            height: size.1 as u64,
-        };
+        let too_large = || ImageError::TooLarge { path: path.into(), width: size.0 as u64, height: size.1 as u64 };
         let (_, pixels) = layer.channel_data.pixels.ok_or_else(too_large)?;
         let width = u32::try_from(size.0).map_err(|_| too_large())?;
         let height = u32::try_from(size.1).map_err(|_| too_large())?;
-        Ok(Self {
-            width,
-            height,
-            pixels,
-        })
+        Ok(Self { width, height, pixels })
     }
 
     /// Converts to 8-bit sRGB RGBA (alpha 255), row 0 first, for display:
@@ -296,23 +229,10 @@ impl Image {
         let rgba = self.to_srgb8(exposure_stops);
         write_atomic(path, |file| {
             image::codecs::png::PngEncoder::new(file)
-                .write_image(
-                    &rgba,
-                    self.width,
-                    self.height,
-                    image::ExtendedColorType::Rgba8,
-                )
+                .write_image(&rgba, self.width, self.height, image::ExtendedColorType::Rgba8)
                 .map_err(|e| match e {
-                    image::ImageError::IoError(source) => ImageError::Io {
-                        op: "write",
-                        path: path.into(),
-                        source,
-                    },
-                    e => ImageError::Png {
-                        op: "write",
-                        path: path.into(),
-                        message: e.to_string(),
-                    },
+                    image::ImageError::IoError(source) => ImageError::Io { op: "write", path: path.into(), source },
+                    e => ImageError::Png { op: "write", path: path.into(), message: e.to_string() },
                 })
         })
     }
@@ -320,11 +240,7 @@ impl Image {
     /// Both formats need at least one pixel and a pixel buffer matching the size.
     fn check_size(&self, path: &Path) -> Result<(), ImageError> {
         if self.width == 0 || self.height == 0 {
-            return Err(ImageError::Empty {
-                path: path.into(),
-                width: self.width,
-                height: self.height,
-            });
+            return Err(ImageError::Empty { path: path.into(), width: self.width, height: self.height });
         }
         let expected = pixel_count(self.width, self.height);
         if expected != Some(self.pixels.len()) {
@@ -346,16 +262,8 @@ fn pixel_count(width: u32, height: u32) -> Option<usize> {
 
 fn exr_error(op: &'static str, path: &Path, e: exr::error::Error) -> ImageError {
     match e {
-        exr::error::Error::Io(source) => ImageError::Io {
-            op,
-            path: path.into(),
-            source,
-        },
-        other => ImageError::Exr {
-            op,
-            path: path.into(),
-            message: other.to_string(),
-        },
+        exr::error::Error::Io(source) => ImageError::Io { op, path: path.into(), source },
+        other => ImageError::Exr { op, path: path.into(), message: other.to_string() },
     }
 }
 
@@ -374,11 +282,7 @@ pub fn tone_map_aces(x: f32) -> f32 {
 /// The sRGB transfer function (linear [0, 1] to encoded [0, 1]) followed by rounding to 8 bits.
 pub fn encode_srgb8(linear: f32) -> u8 {
     let l = if linear > 0.0 { linear.min(1.0) } else { 0.0 };
-    let e = if l <= 0.003_130_8 {
-        12.92 * l
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
+    let e = if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
     (e * 255.0 + 0.5).clamp(0.0, 255.0) as u8
 }
 
@@ -390,32 +294,17 @@ fn write_atomic(
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), ImageError>,
 ) -> Result<(), ImageError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let io_err = |source: io::Error| ImageError::Io {
-        op: "write",
-        path: path.into(),
-        source,
-    };
+    let io_err = |source: io::Error| ImageError::Io { op: "write", path: path.into(), source };
 
-    let file_name = path.file_name().ok_or_else(|| {
-        io_err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            "the path does not name a file",
-        ))
-    })?;
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| io_err(io::Error::new(io::ErrorKind::InvalidInput, "the path does not name a file")))?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
-    tmp_name.push(format!(
-        ".{}.{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    tmp_name.push(format!(".{}.{}.tmp", std::process::id(), COUNTER.fetch_add(1, Ordering::Relaxed)));
     let tmp = path.with_file_name(tmp_name);
 
-    let file = fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(io_err)?;
+    let file = fs::OpenOptions::new().write(true).create_new(true).open(&tmp).map_err(io_err)?;
     let mut writer = BufWriter::new(file);
     let result = write(&mut writer)
         .and_then(|()| writer.flush().map_err(io_err))

@@ -15,12 +15,7 @@ pub enum MetricsError {
         "image sizes differ: test image is {test_width}x{test_height}, \
          reference is {ref_width}x{ref_height}"
     )]
-    SizeMismatch {
-        test_width: u32,
-        test_height: u32,
-        ref_width: u32,
-        ref_height: u32,
-    },
+    SizeMismatch { test_width: u32, test_height: u32, ref_width: u32, ref_height: u32 },
     #[error("cannot compare empty ({width}x{height}) images")]
     Empty { width: u32, height: u32 },
     /// A reference with NaN or infinite values is broken; no error measure against it means
@@ -29,12 +24,7 @@ pub enum MetricsError {
     NonFiniteReference { count: usize },
     /// A pixel buffer whose length does not match the image's stated size.
     #[error("the {which} image claims {width}x{height} pixels but holds {actual}")]
-    BadPixelCount {
-        which: &'static str,
-        width: u32,
-        height: u32,
-        actual: usize,
-    },
+    BadPixelCount { which: &'static str, width: u32, height: u32, actual: usize },
 }
 
 /// Error statistics of a test image against a reference; see [`compare`].
@@ -97,16 +87,11 @@ pub fn compare(test: &Image, reference: &Image) -> Result<ErrorStats, MetricsErr
     }
     let pixels = test.pixels.len();
     if pixels == 0 {
-        return Err(MetricsError::Empty {
-            width: test.width,
-            height: test.height,
-        });
+        return Err(MetricsError::Empty { width: test.width, height: test.height });
     }
     let ref_non_finite = reference.count_non_finite();
     if ref_non_finite > 0 {
-        return Err(MetricsError::NonFiniteReference {
-            count: ref_non_finite,
-        });
+        return Err(MetricsError::NonFiniteReference { count: ref_non_finite });
     }
 
     let mut sum_sq = 0.0f64;
@@ -132,12 +117,7 @@ pub fn compare(test: &Image, reference: &Image) -> Result<ErrorStats, MetricsErr
     let mean_ref = sum_ref / n;
 
     let (rmse, rel_rmse, max_abs, psnr) = if non_finite > 0 {
-        (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        )
+        (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY)
     } else {
         let rmse = (sum_sq / n).sqrt();
         let rel_rmse = if rmse == 0.0 {
@@ -156,15 +136,7 @@ pub fn compare(test: &Image, reference: &Image) -> Result<ErrorStats, MetricsErr
         };
         (rmse, rel_rmse, max_abs, psnr)
     };
-    Ok(ErrorStats {
-        rel_rmse,
-        rmse,
-        max_abs,
-        psnr,
-        mean_ref,
-        non_finite,
-        pixels,
-    })
+    Ok(ErrorStats { rel_rmse, rmse, max_abs, psnr, mean_ref, non_finite, pixels })
 }
 
 impl ErrorStats {
@@ -200,13 +172,7 @@ fn json_f64(v: f64) -> serde_json::Value {
 /// `| N non-finite values` when the test image has any.
 impl fmt::Display for ErrorStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "rel RMSE {:.2}% | max abs {:.1e} | PSNR {:.1} dB",
-            self.rel_rmse * 100.0,
-            self.max_abs,
-            self.psnr
-        )?;
+        write!(f, "rel RMSE {:.2}% | max abs {:.1e} | PSNR {:.1} dB", self.rel_rmse * 100.0, self.max_abs, self.psnr)?;
         if self.non_finite > 0 {
             write!(f, " | {} non-finite values", self.non_finite)?;
         }

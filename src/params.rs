@@ -119,8 +119,7 @@ impl Phase {
     }
 
     /// All kinds, in UI order, with their file names.
-    pub const KINDS: [&'static str; 5] =
-        ["isotropic", "henyey-greenstein", "schlick", "cornette-shanks", "rayleigh"];
+    pub const KINDS: [&'static str; 5] = ["isotropic", "henyey-greenstein", "schlick", "cornette-shanks", "rayleigh"];
 
     /// Stable small integer used by the shaders (`PHASE_*` in `common.wgsl`).
     pub fn id(&self) -> u32 {
@@ -207,13 +206,8 @@ impl Medium {
         max: 1.0e4,
         doc: "Absorption coefficient sigma_a per channel: fraction of light absorbed per unit length.",
     };
-    pub const DENSITY: Spec = Spec {
-        name: "density",
-        unit: "x",
-        min: 0.0,
-        max: 1.0e3,
-        doc: "Multiplier applied to both coefficients.",
-    };
+    pub const DENSITY: Spec =
+        Spec { name: "density", unit: "x", min: 0.0, max: 1.0e3, doc: "Multiplier applied to both coefficients." };
 
     /// `sigma_s * density`.
     pub fn sigma_s(&self) -> Vec3 {
@@ -238,12 +232,7 @@ impl Medium {
 
 impl Default for Medium {
     fn default() -> Self {
-        Medium {
-            scattering: Vec3::splat(0.1),
-            absorption: Vec3::splat(0.01),
-            density: 1.0,
-            phase: Phase::default(),
-        }
+        Medium { scattering: Vec3::splat(0.1), absorption: Vec3::splat(0.01), density: 1.0, phase: Phase::default() }
     }
 }
 
@@ -275,13 +264,8 @@ pub enum Light {
 }
 
 impl Light {
-    pub const POSITION: Spec = Spec {
-        name: "position",
-        unit: "unit",
-        min: -1.0e7,
-        max: 1.0e7,
-        doc: "World position of the point light.",
-    };
+    pub const POSITION: Spec =
+        Spec { name: "position", unit: "unit", min: -1.0e7, max: 1.0e7, doc: "World position of the point light." };
     pub const INTENSITY: Spec = Spec {
         name: "intensity",
         unit: "W/sr",
@@ -390,10 +374,8 @@ pub struct Grid {
 }
 
 impl Grid {
-    pub const PLANES: Spec =
-        Spec { name: "planes", unit: "", min: 8.0, max: 8192.0, doc: "Epipolar planes (x)." };
-    pub const RAYS: Spec =
-        Spec { name: "rays", unit: "", min: 8.0, max: 8192.0, doc: "View rays per plane (y)." };
+    pub const PLANES: Spec = Spec { name: "planes", unit: "", min: 8.0, max: 8192.0, doc: "Epipolar planes (x)." };
+    pub const RAYS: Spec = Spec { name: "rays", unit: "", min: 8.0, max: 8192.0, doc: "View rays per plane (y)." };
     pub const BINS: Spec = Spec {
         name: "bins",
         unit: "bits",
@@ -417,10 +399,7 @@ impl Grid {
         Self::RAYS.check(self.rays as f64)?;
         Self::BINS.check(self.bins as f64)?;
         if !self.bins.is_multiple_of(32) {
-            return Err(ParamError::Invalid(format!(
-                "bins = {} must be a multiple of 32",
-                self.bins
-            )));
+            return Err(ParamError::Invalid(format!("bins = {} must be a multiple of 32", self.bins)));
         }
         Ok(())
     }
@@ -432,8 +411,7 @@ impl Grid {
         if parts.len() != 3 {
             return Err(bad());
         }
-        let n: Vec<u32> =
-            parts.iter().map(|p| p.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+        let n: Vec<u32> = parts.iter().map(|p| p.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
         let g = Grid { planes: n[0], rays: n[1], bins: n[2], ..Grid::default() };
         g.validate()?;
         Ok(g)

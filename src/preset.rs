@@ -101,7 +101,9 @@ impl Preset {
             g.validate().map_err(|source| PresetError::Invalid { path: path.into(), source })?;
         }
         if let Some(e) = p.exposure {
-            crate::params::Exposure::STOPS.check(e as f64).map_err(|source| PresetError::Invalid { path: path.into(), source })?;
+            crate::params::Exposure::STOPS
+                .check(e as f64)
+                .map_err(|source| PresetError::Invalid { path: path.into(), source })?;
         }
         Ok(p)
     }

@@ -63,7 +63,8 @@ fn quick_bench_writes_every_file_with_rows_for_every_method() {
 
     let (header, rows) = csv_rows(&dir.path().join("results.csv"));
     assert_eq!(header[..6], ["method", "setting", "total_ms", "rel_rmse", "max_abs", "psnr"]);
-    for pass in ["shadow_map_ms", "surface_ms", "voxelize_ms", "scan_ms", "integrate_ms", "raymarch_ms", "composite_ms"] {
+    for pass in ["shadow_map_ms", "surface_ms", "voxelize_ms", "scan_ms", "integrate_ms", "raymarch_ms", "composite_ms"]
+    {
         assert!(header.iter().any(|h| h == pass), "no column {pass} in {header:?}");
     }
     for method in ["vsv", "cartesian", "raymarch"] {

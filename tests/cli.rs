@@ -47,8 +47,18 @@ fn renders_the_builtin_scene_with_json_and_exr() {
     let hdr = dir.path().join("hdr.exr");
     let o = epivox(
         &[
-            "render", "--out", png.to_str().unwrap(), "--size", "64x48", "--grid", "128x128x64", "--json",
-            "--scatter-exr", exr.to_str().unwrap(), "--hdr-exr", hdr.to_str().unwrap(),
+            "render",
+            "--out",
+            png.to_str().unwrap(),
+            "--size",
+            "64x48",
+            "--grid",
+            "128x128x64",
+            "--json",
+            "--scatter-exr",
+            exr.to_str().unwrap(),
+            "--hdr-exr",
+            hdr.to_str().unwrap(),
         ],
         &[],
     );

@@ -49,7 +49,8 @@ fn harness(opts: EditorOptions) -> Option<Harness<'static, App>> {
         Err(e) => panic!("{e}"),
         Ok(_) => {}
     }
-    let rs = egui_kittest::wgpu::create_render_state(epivox::editor::wgpu_setup(), egui_wgpu::RendererOptions::default());
+    let rs =
+        egui_kittest::wgpu::create_render_state(epivox::editor::wgpu_setup(), egui_wgpu::RendererOptions::default());
     let rs2 = rs.clone();
     let make = Box::new(move |ctx: &egui::Context| {
         Editor::new(ctx, rs2, small_scene(), 0.0, None, &opts).unwrap_or_else(|e| panic!("{e}"))
@@ -115,7 +116,8 @@ fn distinct_colours(px: &[[u8; 4]]) -> usize {
 /// Mean absolute difference per channel (0..255).
 fn mean_diff(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
     assert_eq!(a.len(), b.len());
-    let s: u64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as i64 - q[c] as i64).unsigned_abs()).sum::<u64>()).sum();
+    let s: u64 =
+        a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (p[c] as i64 - q[c] as i64).unsigned_abs()).sum::<u64>()).sum();
     s as f64 / (a.len() * 3) as f64
 }
 
@@ -327,7 +329,10 @@ fn a_broken_shader_keeps_the_picture_and_shows_the_error_until_fixed() {
     let common = std::fs::read_to_string(shaders.join("common.wgsl")).unwrap();
     std::fs::write(shaders.join("common.wgsl"), format!("{common}\nfn oops( {{\n")).unwrap();
     assert!(
-        wait_for(&mut h, Duration::from_secs(20), |e| e.shader_error.as_deref().is_some_and(|m| m.contains("common.wgsl:"))),
+        wait_for(&mut h, Duration::from_secs(20), |e| e
+            .shader_error
+            .as_deref()
+            .is_some_and(|m| m.contains("common.wgsl:"))),
         "a broken common.wgsl was not reported"
     );
     std::fs::write(shaders.join("common.wgsl"), &common).unwrap();
@@ -399,7 +404,11 @@ fn dragging_orbits_the_camera_or_moves_the_light_and_each_drag_is_one_undo_step(
     assert_eq!(h.state().ed().look().camera, cam0, "one undo did not undo the whole drag");
     // Put a point light in view, then drag its handle: the light moves, the camera does not.
     let target = cam0.target;
-    let light = epivox::params::Light::Point { position: target + glam::Vec3::Y * 0.3, intensity: glam::Vec3::splat(5.0), radius: 0.0 };
+    let light = epivox::params::Light::Point {
+        position: target + glam::Vec3::Y * 0.3,
+        intensity: glam::Vec3::splat(5.0),
+        radius: 0.0,
+    };
     h.state_mut().ed_mut().apply(Command::SetLight(light, None));
     h.run();
     let handle = h.state().ed().light_handle_pos().expect("the light is in view");
@@ -410,7 +419,10 @@ fn dragging_orbits_the_camera_or_moves_the_light_and_each_drag_is_one_undo_step(
     let epivox::params::Light::Point { position, .. } = moved else { panic!("{moved:?}") };
     assert!(position.distance(target + glam::Vec3::Y * 0.3) > 1e-3, "the light did not move");
     let after = h.state().ed().light_handle_pos().unwrap();
-    assert!((after - (handle + egui::vec2(40.0, -20.0))).length() < 3.0, "the light does not follow the pointer: {after:?}");
+    assert!(
+        (after - (handle + egui::vec2(40.0, -20.0))).length() < 3.0,
+        "the light does not follow the pointer: {after:?}"
+    );
     h.state_mut().ed_mut().apply(Command::Undo);
     assert_eq!(h.state().ed().look().light, light.normalized());
 }
@@ -428,10 +440,7 @@ fn the_accuracy_check_runs_in_the_background_and_can_be_cancelled() {
     // `run` (step until settled) would depend on how fast the reference finishes.
     h.run_steps(3);
     assert_eq!(h.state().ed().look().medium.density, 1.5);
-    assert!(
-        wait_for(&mut h, Duration::from_secs(300), |e| !e.accuracy_running()),
-        "the reference did not finish"
-    );
+    assert!(wait_for(&mut h, Duration::from_secs(300), |e| !e.accuracy_running()), "the reference did not finish");
     let (scatter, hdr) = h.state().ed().accuracy_rel_rmse().expect("no accuracy result");
     let (w, ht) = h.state().ed().accuracy_size().unwrap();
     eprintln!("accuracy check at {w}x{ht}: scattered light rel. RMSE {scatter:.4}, final {hdr:.4}");
@@ -439,7 +448,8 @@ fn the_accuracy_check_runs_in_the_background_and_can_be_cancelled() {
     // The same measurement made independently (headless GPU renderer, reference, metrics) agrees:
     // the check measured the look and view it was started on, at its size.
     let scene = small_scene();
-    let mut r = epivox::render::Renderer::new(GpuContext::headless().unwrap(), &epivox::gpu::ShaderLibrary::default()).unwrap();
+    let mut r =
+        epivox::render::Renderer::new(GpuContext::headless().unwrap(), &epivox::gpu::ShaderLibrary::default()).unwrap();
     let gpu = r.render(&scene, w, ht, epivox::render::Method::Vsv).unwrap();
     let reference = epivox::reference::render(&scene, w, ht, &epivox::editor::check_options());
     let expect = epivox::metrics::compare(&gpu.scatter, &reference.scatter).unwrap().rel_rmse;

@@ -74,7 +74,12 @@ fn the_window_opens_on_the_built_in_scene_draws_and_quits() {
     // The viewport's part of the screenshot is a picture, not one flat colour.
     let v: Vec<u32> = summary["viewport_px"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap() as u32).collect();
     let (x0, y0, w, h) = (v[0], v[1], v[2], v[3]);
-    assert!(w > 64 && h > 64 && x0 + w <= img.width() && y0 + h <= img.height(), "viewport {v:?} in {}x{}", img.width(), img.height());
+    assert!(
+        w > 64 && h > 64 && x0 + w <= img.width() && y0 + h <= img.height(),
+        "viewport {v:?} in {}x{}",
+        img.width(),
+        img.height()
+    );
     let mut colours: Vec<[u8; 4]> = Vec::new();
     for y in (y0 + 2..y0 + h - 2).step_by(3) {
         for x in (x0 + 2..x0 + w - 2).step_by(3) {

@@ -84,14 +84,24 @@ fn closed_box_around_the_light_leaks_nothing() {
         quad("floor", Vec3::ZERO, Vec3::X * 4.0, Vec3::Z * 4.0),
         cube("box", Vec3::new(0.0, 1.2, 0.0), Vec3::splat(0.5)),
     ];
-    for grid in [Grid { planes: 256, rays: 256, bins: 64, ..Grid::default() }, Grid { planes: 64, rays: 64, bins: 32, ..Grid::default() }] {
+    for grid in [
+        Grid { planes: 256, rays: 256, bins: 64, ..Grid::default() },
+        Grid { planes: 64, rays: 64, bins: 32, ..Grid::default() },
+    ] {
         scene.grid = grid;
         let out = r.render(&scene, 96, 96, Method::Vsv).unwrap();
         let max = out.scatter.pixels.iter().flat_map(|p| p.iter()).fold(0.0f32, |a, &b| a.max(b));
         // Reference scale: the same light without the box.
         let mut open = scene.clone();
         open.meshes.truncate(1);
-        let open_max = r.render(&open, 96, 96, Method::Vsv).unwrap().scatter.pixels.iter().flat_map(|p| p.iter()).fold(0.0f32, |a, &b| a.max(b));
+        let open_max = r
+            .render(&open, 96, 96, Method::Vsv)
+            .unwrap()
+            .scatter
+            .pixels
+            .iter()
+            .flat_map(|p| p.iter())
+            .fold(0.0f32, |a, &b| a.max(b));
         assert!(max <= 1e-4 * open_max, "grid {grid}: light leaked out of the box: {max} (open: {open_max})");
     }
 }
@@ -115,7 +125,10 @@ fn timings_cover_every_pass() {
         return;
     }
     let names: Vec<&str> = out.timings.iter().map(|t| t.pass).collect();
-    assert_eq!(names, ["shadow_map", "surface", "ranges", "cull", "voxelize", "scan", "scatter_table", "integrate", "composite"]);
+    assert_eq!(
+        names,
+        ["shadow_map", "surface", "ranges", "cull", "voxelize", "scan", "scatter_table", "integrate", "composite"]
+    );
     assert!(out.timings.iter().all(|t| t.ms.is_finite() && t.ms >= 0.0));
     assert!(out.total_ms() > 0.0);
 }

@@ -54,24 +54,12 @@ fn metrics_mixed_channels_2x1() {
     assert!(close(s.max_abs, 2.0));
     assert!(close(s.psnr, 20.0 * (4.0 / 0.875f64.sqrt()).log10()));
     assert!((s.psnr - 12.6211).abs() < 1e-4, "{}", s.psnr);
-    assert_eq!(
-        s.to_string(),
-        "rel RMSE 70.16% | max abs 2.0e0 | PSNR 12.6 dB"
-    );
+    assert_eq!(s.to_string(), "rel RMSE 70.16% | max abs 2.0e0 | PSNR 12.6 dB");
 }
 
 #[test]
 fn metrics_identical_images() {
-    let a = img(
-        2,
-        2,
-        &[
-            [0.1, 0.2, 0.3],
-            [1.0, 2.0, 3.0],
-            [0.0, 0.0, 0.0],
-            [5.0, 0.5, 0.05],
-        ],
-    );
+    let a = img(2, 2, &[[0.1, 0.2, 0.3], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0], [5.0, 0.5, 0.05]]);
     let s = compare(&a, &a.clone()).unwrap();
     assert_eq!(s.rmse, 0.0);
     assert_eq!(s.rel_rmse, 0.0);
@@ -80,10 +68,7 @@ fn metrics_identical_images() {
     assert_eq!(s.pixels, 4);
     assert_eq!(s.to_json()["psnr"], "inf");
     assert_eq!(s.to_json()["rmse"], 0.0);
-    assert_eq!(
-        s.to_string(),
-        "rel RMSE 0.00% | max abs 0.0e0 | PSNR inf dB"
-    );
+    assert_eq!(s.to_string(), "rel RMSE 0.00% | max abs 0.0e0 | PSNR inf dB");
 }
 
 #[test]
@@ -110,25 +95,12 @@ fn metrics_size_mismatch_names_both_sizes() {
 
 #[test]
 fn metrics_empty_and_broken_reference_are_errors() {
-    assert!(matches!(
-        compare(&Image::new(0, 5), &Image::new(0, 5)),
-        Err(MetricsError::Empty { .. })
-    ));
+    assert!(matches!(compare(&Image::new(0, 5), &Image::new(0, 5)), Err(MetricsError::Empty { .. })));
     let mut r = Image::new(2, 1);
     r.set(0, 0, [f32::NAN, 0.0, 0.0]);
-    assert!(matches!(
-        compare(&Image::new(2, 1), &r),
-        Err(MetricsError::NonFiniteReference { count: 1 })
-    ));
-    let bad = Image {
-        width: 2,
-        height: 2,
-        pixels: vec![[0.0; 3]; 3],
-    };
-    assert!(matches!(
-        compare(&bad, &Image::new(2, 2)),
-        Err(MetricsError::BadPixelCount { .. })
-    ));
+    assert!(matches!(compare(&Image::new(2, 1), &r), Err(MetricsError::NonFiniteReference { count: 1 })));
+    let bad = Image { width: 2, height: 2, pixels: vec![[0.0; 3]; 3] };
+    assert!(matches!(compare(&bad, &Image::new(2, 2)), Err(MetricsError::BadPixelCount { .. })));
 }
 
 #[test]
@@ -165,17 +137,7 @@ fn construction_and_accessors() {
     assert_eq!(Image::new(0, 0).mean(), [0.0; 3]);
 
     let err = Image::from_rgba_f32(2, 3, &data[..23]).unwrap_err();
-    assert!(
-        matches!(
-            err,
-            ImageError::SizeMismatch {
-                expected: 24,
-                actual: 23,
-                ..
-            }
-        ),
-        "{err}"
-    );
+    assert!(matches!(err, ImageError::SizeMismatch { expected: 24, actual: 23, .. }), "{err}");
     assert!(Image::from_pixels(2, 2, vec![[0.0; 3]; 5]).is_err());
 
     let mut im = Image::new(2, 2);
@@ -224,15 +186,7 @@ fn test_image(w: u32, h: u32) -> Image {
     for y in 0..h {
         for x in 0..w {
             let t = (y * w + x) as f32;
-            im.set(
-                x,
-                y,
-                [
-                    t * 0.123_456_79,
-                    1.0 / (t + 1.0),
-                    (t * 0.7).sin() * 1e-3 + 1e6 * (x == 0) as u32 as f32,
-                ],
-            );
+            im.set(x, y, [t * 0.123_456_79, 1.0 / (t + 1.0), (t * 0.7).sin() * 1e-3 + 1e6 * (x == 0) as u32 as f32]);
         }
     }
     // Exotic values must survive too.
@@ -263,10 +217,7 @@ fn exr_round_trip_is_bit_exact() {
     assert!(back.get(0, 0)[0].is_nan());
     assert_eq!(back.get(0, 0)[1..], [1.0, 2.0]);
     // Only the destination file is left: no temporary files.
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(names, vec![std::ffi::OsString::from("img.exr")]);
 }
 
@@ -302,21 +253,14 @@ fn png_has_the_right_size() {
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 2);
     assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 3);
-    assert_eq!(
-        std::fs::read_dir(dir.path()).unwrap().count(),
-        1,
-        "no temporary files left"
-    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary files left");
 }
 
 #[test]
 fn writing_into_a_missing_directory_names_the_path() {
     let dir = tempfile::tempdir().unwrap();
     let im = Image::new(2, 2);
-    for path in [
-        dir.path().join("missing/sub/out.png"),
-        dir.path().join("missing/out.exr"),
-    ] {
+    for path in [dir.path().join("missing/sub/out.png"), dir.path().join("missing/out.exr")] {
         let err = if path.extension().unwrap() == "png" {
             im.write_png(&path, 0.0).unwrap_err()
         } else {
@@ -345,10 +289,7 @@ fn reading_bad_files_names_the_path() {
     std::fs::write(&not_exr, b"this is a text file, not an OpenEXR image\n").unwrap();
     let err = Image::read_exr(&not_exr).unwrap_err();
     assert!(matches!(err, ImageError::Exr { .. }), "{err:?}");
-    assert!(
-        err.to_string().contains(&*not_exr.to_string_lossy()),
-        "{err}"
-    );
+    assert!(err.to_string().contains(&*not_exr.to_string_lossy()), "{err}");
 
     // A PNG is not an EXR either.
     let png = dir.path().join("img.png");
@@ -367,8 +308,5 @@ fn reading_bad_files_names_the_path() {
     let missing = dir.path().join("missing.exr");
     let err = Image::read_exr(&missing).unwrap_err();
     assert!(matches!(err, ImageError::Io { .. }), "{err:?}");
-    assert!(
-        err.to_string().contains(&*missing.to_string_lossy()),
-        "{err}"
-    );
+    assert!(err.to_string().contains(&*missing.to_string_lossy()), "{err}");
 }

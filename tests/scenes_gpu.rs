@@ -39,7 +39,10 @@ fn builtin_scene_matches_reference() {
 fn builtin_scene_error_falls_with_the_grid() {
     let Some(mut r) = renderer() else { return };
     let mut errors = Vec::new();
-    for grid in [Grid { planes: 128, rays: 128, bins: 64, ..Grid::default() }, Grid { planes: 1024, rays: 1024, bins: 512, ..Grid::default() }] {
+    for grid in [
+        Grid { planes: 128, rays: 128, bins: 64, ..Grid::default() },
+        Grid { planes: 1024, rays: 1024, bins: 512, ..Grid::default() },
+    ] {
         let mut scene = builtin_scene();
         scene.grid = grid;
         errors.push(against_reference(&mut r, &scene, Method::Vsv, 64, 64).2.rel_rmse);
@@ -49,7 +52,12 @@ fn builtin_scene_error_falls_with_the_grid() {
 
 #[test]
 fn cornell_box_matches_reference() {
-    check(shared("cornell_box/CornellBox-Original.gltf"), Grid { planes: 512, rays: 512, bins: 128, ..Grid::default() }, 96, 0.06);
+    check(
+        shared("cornell_box/CornellBox-Original.gltf"),
+        Grid { planes: 512, rays: 512, bins: 128, ..Grid::default() },
+        96,
+        0.06,
+    );
 }
 
 /// The bunny on a floor, lit from behind and above so that its shadow volume runs toward the eye.
@@ -58,7 +66,12 @@ fn stanford_bunny_matches_reference() {
     let mut scene = shared("stanford_bunny/bun_zipper.ply");
     let b = scene.bounds();
     let (c, r) = (b.center(), b.radius());
-    scene.meshes.push(quad("floor", glam::Vec3::new(c.x, b.min.y, c.z), glam::Vec3::X * 6.0 * r, glam::Vec3::Z * 6.0 * r));
+    scene.meshes.push(quad(
+        "floor",
+        glam::Vec3::new(c.x, b.min.y, c.z),
+        glam::Vec3::X * 6.0 * r,
+        glam::Vec3::Z * 6.0 * r,
+    ));
     scene.light = point_light(c + glam::Vec3::new(0.3, 2.0, -2.5) * r);
     if let epivox::params::Light::Point { intensity, .. } = &mut scene.light {
         *intensity = glam::Vec3::splat(10.0 * r * r);

@@ -18,8 +18,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The reference renderer's source: part of the key, so that a change to it re-renders.
-const REFERENCE_SOURCE: [&str; 3] =
-    [include_str!("../reference/mod.rs"), include_str!("../reference/quadrature.rs"), include_str!("../reference/tracer.rs")];
+const REFERENCE_SOURCE: [&str; 3] = [
+    include_str!("../reference/mod.rs"),
+    include_str!("../reference/quadrature.rs"),
+    include_str!("../reference/tracer.rs"),
+];
 
 /// 128-bit FNV-1a: stable across Rust versions and platforms (std's hashers promise neither).
 pub struct KeyHasher(u128);
@@ -158,5 +161,11 @@ pub fn cached_reference(
     let meta_path = dir.join(format!("ref-{key}.json"));
     let text = serde_json::to_string_pretty(&meta).unwrap_or_default();
     std::fs::write(&meta_path, text).map_err(|source| BenchError::Io { op: "write", path: meta_path, source })?;
-    Ok(CachedReference { key, scatter: r.scatter, hdr: r.hdr, status: CacheStatus::Rendered { seconds }, path: scatter_path })
+    Ok(CachedReference {
+        key,
+        scatter: r.scatter,
+        hdr: r.hdr,
+        status: CacheStatus::Rendered { seconds },
+        path: scatter_path,
+    })
 }

@@ -181,7 +181,10 @@ pub fn scaling_points(quick: bool) -> [Point; 2] {
     if quick {
         [Point::grid(Method::Vsv, 64, 64, 32, 512), Point::march(32, 256, false)]
     } else {
-        [Point::grid(Method::Vsv, 1024, 1024, 256, Renderer::SHADOW_MAP_SIZE), Point::march(256, Renderer::SHADOW_MAP_SIZE, false)]
+        [
+            Point::grid(Method::Vsv, 1024, 1024, 256, Renderer::SHADOW_MAP_SIZE),
+            Point::march(256, Renderer::SHADOW_MAP_SIZE, false),
+        ]
     }
 }
 
@@ -378,7 +381,13 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     let mut notes = Vec::new();
 
     // The reference first: it is what every point is compared against.
-    let reference = cached_reference(scene, w, h, &ReferenceOptions { progress: opts.progress, ..opts.reference }, &opts.cache_dir)?;
+    let reference = cached_reference(
+        scene,
+        w,
+        h,
+        &ReferenceOptions { progress: opts.progress, ..opts.reference },
+        &opts.cache_dir,
+    )?;
     if let CacheStatus::Rendered { seconds } = reference.status {
         if opts.progress {
             eprintln!("reference rendered in {seconds:.1} s and cached as {}", reference.path.display());
@@ -429,12 +438,18 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         return Err(BenchError::NothingRendered(first_failure.unwrap_or_else(|| "the sweep is empty".into())));
     }
 
-    let mut scale = |scene: &mut Scene, tri: usize, size: (u32, u32), sink: &mut Vec<ScalingRow>, notes: &mut Vec<String>| {
+    let mut scale = |scene: &mut Scene,
+                     tri: usize,
+                     size: (u32, u32),
+                     sink: &mut Vec<ScalingRow>,
+                     notes: &mut Vec<String>| {
         for p in &scaling {
             bar.set_message(format!("{} {} at {}x{}, {tri} triangles", p.method_name(), p.setting(), size.0, size.1));
             // Median of 3 after one warm-up: these points only time, and the largest take long.
             match measure(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
-                Ok((timing, _)) => sink.push(ScalingRow { point: *p, triangles: tri, width: size.0, height: size.1, timing }),
+                Ok((timing, _)) => {
+                    sink.push(ScalingRow { point: *p, triangles: tri, width: size.0, height: size.1, timing })
+                }
                 Err(e) => notes.push(format!(
                     "{} {} at {}x{} with {tri} triangles: skipped, it failed: {e}",
                     p.method_name(),

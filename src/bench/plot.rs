@@ -60,8 +60,13 @@ pub struct Plot<'a> {
     pub series: Vec<Series>,
 }
 
-pub const COLORS: [RGBColor; 5] =
-    [RGBColor(0, 114, 178), RGBColor(213, 94, 0), RGBColor(0, 158, 115), RGBColor(204, 121, 167), RGBColor(86, 180, 233)];
+pub const COLORS: [RGBColor; 5] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(86, 180, 233),
+];
 
 fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
@@ -201,13 +206,12 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
             let on_front = |i: usize| s.front.as_ref().is_none_or(|f| f.get(i).copied().unwrap_or(false));
             let mut line: Vec<(f64, f64)> = pts.iter().filter(|(i, _)| on_front(*i)).map(|(_, p)| *p).collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let series = chart
-                .draw_series(LineSeries::new(line, color.stroke_width(2)))
-                .map_err(|e| err(e.to_string()))?;
+            let series =
+                chart.draw_series(LineSeries::new(line, color.stroke_width(2))).map_err(|e| err(e.to_string()))?;
             if text {
-                series.label(s.name.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+                series
+                    .label(s.name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
             }
             // Front points filled, the others hollow.
             chart
@@ -229,9 +233,14 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
         }
         root.present().map_err(|e| err(e.to_string()))?;
     }
-    let img = image::RgbImage::from_raw(width, height, buf).ok_or_else(|| err("plot buffer has the wrong size".into()))?;
+    let img =
+        image::RgbImage::from_raw(width, height, buf).ok_or_else(|| err("plot buffer has the wrong size".into()))?;
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| BenchError::Io { op: "create", path: dir.to_path_buf(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| BenchError::Io {
+            op: "create",
+            path: dir.to_path_buf(),
+            source,
+        })?;
     }
     img.save_with_format(path, image::ImageFormat::Png).map_err(|e| err(e.to_string()))
 }

@@ -69,7 +69,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         opts.height,
         renderer.ctx.adapter_name()
     );
-    let r = bench::run(&mut renderer, &scene, &opts).with_context(|| format!("benchmark into {}", args.out.display()))?;
+    let r =
+        bench::run(&mut renderer, &scene, &opts).with_context(|| format!("benchmark into {}", args.out.display()))?;
 
     println!("{:<10} {:<24} {:>11} {:>11}", "method", "setting", "total ms", "rel RMSE");
     for row in &r.rows {

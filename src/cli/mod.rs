@@ -21,7 +21,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "epivox", version, about = "Light shafts and volumetric shadows with Voxelized Epipolar Shadow Volumes")]
+#[command(
+    name = "epivox",
+    version,
+    about = "Light shafts and volumetric shadows with Voxelized Epipolar Shadow Volumes"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -227,7 +231,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let mut pruned_z = None;
     let (hdr, scatter, out, adapter): (Image, Image, Option<RenderOutput>, String) = match args.method {
         Method::Reference => {
-            let opts = reference::ReferenceOptions { samples: args.samples, progress: !args.json, ..Default::default() };
+            let opts =
+                reference::ReferenceOptions { samples: args.samples, progress: !args.json, ..Default::default() };
             let r = reference::render(&scene, w, h, &opts);
             (r.hdr, r.scatter, None, "cpu reference (f64)".to_string())
         }
@@ -250,10 +255,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     };
     let wall_ms = started.elapsed().as_secs_f64() * 1e3;
     if hdr.count_non_finite() > 0 || scatter.count_non_finite() > 0 {
-        eprintln!(
-            "warning: the image has {} non-finite values",
-            hdr.count_non_finite() + scatter.count_non_finite()
-        );
+        eprintln!("warning: the image has {} non-finite values", hdr.count_non_finite() + scatter.count_non_finite());
     }
     hdr.write_png(&args.out, exposure)?;
     if let Some(p) = &args.scatter_exr {
@@ -307,7 +309,14 @@ pub fn render(args: RenderArgs) -> Result<()> {
         );
         if args.timings {
             if timings.is_empty() {
-                println!("no GPU timings: {}", if out.is_some() { "the adapter has no encoder timestamps" } else { "the reference runs on the CPU" });
+                println!(
+                    "no GPU timings: {}",
+                    if out.is_some() {
+                        "the adapter has no encoder timestamps"
+                    } else {
+                        "the reference runs on the CPU"
+                    }
+                );
             } else {
                 println!("GPU time per pass on {adapter}:");
                 for t in &timings {
@@ -345,7 +354,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
 pub fn compare(a: &Path, b: &Path, json: bool) -> Result<()> {
     let ia = Image::read_exr(a)?;
     let ib = Image::read_exr(b)?;
-    let stats = metrics::compare(&ia, &ib).with_context(|| format!("comparing {} against {}", a.display(), b.display()))?;
+    let stats =
+        metrics::compare(&ia, &ib).with_context(|| format!("comparing {} against {}", a.display(), b.display()))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&stats.to_json())?);
     } else {

@@ -69,7 +69,9 @@ pub fn method_label(m: &Method) -> String {
     match m {
         Method::Vsv => "VSV".into(),
         Method::Cartesian => "Cartesian".into(),
-        Method::Raymarch { steps, jitter } => format!("ray march ({steps} steps{})", if *jitter { ", jittered" } else { "" }),
+        Method::Raymarch { steps, jitter } => {
+            format!("ray march ({steps} steps{})", if *jitter { ", jittered" } else { "" })
+        }
         other => format!("{other:?}"),
     }
 }
@@ -703,7 +705,9 @@ impl Editor {
             }
         }
         // Files dropped on the window: presets are applied, anything else is opened as a scene.
-        let dropped: Vec<PathBuf> = self.ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
+        let dropped: Vec<PathBuf> = self.ctx.input(|i| {
+            i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect()
+        });
         for p in dropped {
             let name = p.file_name().map(|n| n.to_string_lossy().to_lowercase()).unwrap_or_default();
             let preset = name.ends_with(".toml") && !name.ends_with(".scene.toml") && Preset::load(&p).is_ok();
@@ -897,9 +901,17 @@ impl Editor {
                 }
             });
             ui.separator();
-            ui.label(egui::RichText::new(format!("{} · {} triangles", self.scene.name, self.scene.triangle_count())).weak());
+            ui.label(
+                egui::RichText::new(format!("{} · {} triangles", self.scene.name, self.scene.triangle_count())).weak(),
+            );
             if let Some(p) = &self.preset_path {
-                ui.label(egui::RichText::new(format!("preset {}", p.file_name().map(|n| n.to_string_lossy()).unwrap_or_default())).weak());
+                ui.label(
+                    egui::RichText::new(format!(
+                        "preset {}",
+                        p.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
+                    ))
+                    .weak(),
+                );
             }
         });
     }
@@ -909,7 +921,8 @@ impl Editor {
             if let Some(w) = &self.watcher {
                 ui.label(egui::RichText::new(format!("watching {}", w.dir().display())).small().weak());
             } else {
-                let where_ = self.shaders.dir().map(|d| d.display().to_string()).unwrap_or_else(|| "embedded shaders".into());
+                let where_ =
+                    self.shaders.dir().map(|d| d.display().to_string()).unwrap_or_else(|| "embedded shaders".into());
                 ui.label(egui::RichText::new(where_).small().weak());
             }
             if self.scene_job.is_some() {
@@ -983,14 +996,17 @@ impl Editor {
                 }
             }
             ui.separator();
-            let methods = [
-                Method::Vsv,
-                Method::Cartesian,
-                Method::Raymarch { steps: self.raymarch_steps, jitter: true },
-            ];
+            let methods =
+                [Method::Vsv, Method::Cartesian, Method::Raymarch { steps: self.raymarch_steps, jitter: true }];
             egui::ComboBox::new("method", "method").selected_text(method_label(&self.method)).show_ui(ui, |ui| {
                 for m in methods {
-                    if ui.selectable_label(std::mem::discriminant(&m) == std::mem::discriminant(&self.method), method_label(&m)).clicked() {
+                    if ui
+                        .selectable_label(
+                            std::mem::discriminant(&m) == std::mem::discriminant(&self.method),
+                            method_label(&m),
+                        )
+                        .clicked()
+                    {
                         cmds.push(Command::SetMethod(m));
                     }
                 }
@@ -1015,11 +1031,13 @@ impl Editor {
             }
             ui.separator();
             let mut scale = self.render_scale;
-            egui::ComboBox::new("render-scale", "render").selected_text(format!("{}% pixels", (scale * 100.0).round())).show_ui(ui, |ui| {
-                for s in [1.0f32, 0.75, 0.5, 0.25] {
-                    ui.selectable_value(&mut scale, s, format!("{}% pixels", (s * 100.0).round()));
-                }
-            });
+            egui::ComboBox::new("render-scale", "render")
+                .selected_text(format!("{}% pixels", (scale * 100.0).round()))
+                .show_ui(ui, |ui| {
+                    for s in [1.0f32, 0.75, 0.5, 0.25] {
+                        ui.selectable_value(&mut scale, s, format!("{}% pixels", (s * 100.0).round()));
+                    }
+                });
             if scale != self.render_scale {
                 cmds.push(Command::SetRenderScale(scale));
             }
@@ -1103,11 +1121,20 @@ impl Editor {
             let d = response.drag_delta();
             if d != egui::Vec2::ZERO {
                 let l = drag_light(&self.look.camera, &self.look.light, d, rect.height());
-                cmds.push(Command::SetLight(l, Some(super::command::gesture_key(&response, response.id.with("light")))));
+                cmds.push(Command::SetLight(
+                    l,
+                    Some(super::command::gesture_key(&response, response.id.with("light"))),
+                ));
             }
-        } else if let Some(c) = self.camera.handle(ui, &response, &self.look.camera, self.scene.bounds().radius(), rect.height()) {
+        } else if let Some(c) =
+            self.camera.handle(ui, &response, &self.look.camera, self.scene.bounds().radius(), rect.height())
+        {
             // Wheel and keys (no press) merge by frame-less key: one step per burst of them.
-            let key = if response.dragged() { super::command::gesture_key(&response, response.id.with("camera")) } else { response.id.with("camera-wheel") };
+            let key = if response.dragged() {
+                super::command::gesture_key(&response, response.id.with("camera"))
+            } else {
+                response.id.with("camera-wheel")
+            };
             cmds.push(Command::SetCamera(c, Some(key)));
         }
         if response.drag_stopped() {
@@ -1118,7 +1145,11 @@ impl Editor {
         let painter = ui.painter_at(rect);
         if let Some(h) = handle {
             let hot = response.hover_pos().is_some_and(|p| p.distance(h) < 14.0) || self.dragging_light;
-            painter.circle_stroke(h, if hot { 10.0 } else { 7.0 }, egui::Stroke::new(2.0, egui::Color32::from_rgb(255, 220, 90)));
+            painter.circle_stroke(
+                h,
+                if hot { 10.0 } else { 7.0 },
+                egui::Stroke::new(2.0, egui::Color32::from_rgb(255, 220, 90)),
+            );
             painter.circle_filled(h, 2.5, egui::Color32::from_rgb(255, 220, 90));
         }
         let good = self.frame_report().and_then(|r| r.last_good);
@@ -1139,7 +1170,13 @@ impl Editor {
         }
         let has_picture = self.with_resources(|r| r.has_picture()).unwrap_or(false);
         if !has_picture {
-            painter.text(rect.center(), egui::Align2::CENTER_CENTER, "rendering…", egui::FontId::proportional(16.0), egui::Color32::GRAY);
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "rendering…",
+                egui::FontId::proportional(16.0),
+                egui::Color32::GRAY,
+            );
         }
         let render_error = self.frame_report().and_then(|r| r.result.err());
         let mut lines = Vec::new();
@@ -1162,7 +1199,13 @@ impl Editor {
         let hovering_files = ui.input(|i| !i.raw.hovered_files.is_empty());
         if hovering_files {
             painter.rect_filled(rect, 0.0, egui::Color32::from_black_alpha(140));
-            painter.text(rect.center(), egui::Align2::CENTER_CENTER, "drop a scene or a preset", egui::FontId::proportional(20.0), egui::Color32::WHITE);
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "drop a scene or a preset",
+                egui::FontId::proportional(20.0),
+                egui::Color32::WHITE,
+            );
         }
     }
 
@@ -1184,7 +1227,10 @@ impl Editor {
                 Some(p) => line.push(to_screen(p)),
                 None => {
                     if line.len() > 1 {
-                        painter.add(egui::Shape::line(std::mem::take(&mut line), egui::Stroke::new(1.0, egui::Color32::from_rgb(80, 255, 120))));
+                        painter.add(egui::Shape::line(
+                            std::mem::take(&mut line),
+                            egui::Stroke::new(1.0, egui::Color32::from_rgb(80, 255, 120)),
+                        ));
                     }
                     line.clear();
                 }

@@ -56,7 +56,14 @@ impl CameraController {
     /// Applies the pointer and keyboard input of this frame over the viewport; returns the new
     /// camera when it changed. `radius` is the scene's size, for speeds; `height_px` the viewport
     /// height in points (pans follow the pointer).
-    pub fn handle(&self, ui: &egui::Ui, response: &egui::Response, cam: &Camera, radius: f32, height_pts: f32) -> Option<Camera> {
+    pub fn handle(
+        &self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        cam: &Camera,
+        radius: f32,
+        height_pts: f32,
+    ) -> Option<Camera> {
         let mut c = *cam;
         let up = up_of(cam);
         let drag = response.drag_delta();

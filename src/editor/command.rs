@@ -51,7 +51,10 @@ pub enum Command {
     /// Save over the preset that was loaded or saved last.
     SavePreset,
     /// Save to a new file; if it exists and `overwrite` is false, ask first.
-    SavePresetAs { path: PathBuf, overwrite: bool },
+    SavePresetAs {
+        path: PathBuf,
+        overwrite: bool,
+    },
     OpenScene(PathBuf),
     /// Save the viewport's current image (tone-mapped as shown) as PNG.
     Screenshot(PathBuf),
@@ -63,7 +66,9 @@ pub enum Command {
     ScreenshotDialog,
     ExportInspectorDialog,
     // --- jobs ---
-    StartAccuracy { width: u32 },
+    StartAccuracy {
+        width: u32,
+    },
     CancelAccuracy,
     ReloadShaders,
     DismissMessages,

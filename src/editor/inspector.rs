@@ -142,7 +142,9 @@ pub fn slice_image(s: &GridSnapshot, plane: u32, surface_bins: Option<&[f32]>) -
         let gamma = m.gamma_of_ray(ray as f64 + 0.5);
         for k in 0..g.bins {
             let bit = |w: &[u32]| w.get(k as usize / 32).is_some_and(|w| (w >> (k % 32)) & 1 == 1);
-            let beyond = point && s.setup.method != Method::Cartesian && gamma + m.z_of_bin(k as f64 + 0.5) >= std::f64::consts::PI;
+            let beyond = point
+                && s.setup.method != Method::Cartesian
+                && gamma + m.z_of_bin(k as f64 + 0.5) >= std::f64::consts::PI;
             let c = if geo.is_some_and(bit) {
                 egui::Color32::from_rgb(250, 150, 30)
             } else if bit(shadow) {
@@ -426,7 +428,11 @@ impl Inspector {
         };
         let stack = stacked.0.x * stacked.0.y > side.0.x * side.0.y;
         let (gsize, ssize) = if stack { stacked } else { side };
-        let layout = if stack { egui::Layout::top_down(egui::Align::Min) } else { egui::Layout::left_to_right(egui::Align::Min) };
+        let layout = if stack {
+            egui::Layout::top_down(egui::Align::Min)
+        } else {
+            egui::Layout::left_to_right(egui::Align::Min)
+        };
         let mut hovered = None;
         let stroke = egui::Stroke::new(1.0, egui::Color32::from_rgb(80, 255, 120));
         ui.with_layout(layout, |ui| {

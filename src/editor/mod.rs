@@ -116,7 +116,13 @@ pub enum EditorError {
 /// True when a window can be opened: on Linux and the BSDs that needs `DISPLAY` (X11) or
 /// `WAYLAND_DISPLAY`; elsewhere there is always a desktop.
 pub fn display_available() -> bool {
-    if cfg!(any(target_os = "linux", target_os = "freebsd", target_os = "dragonfly", target_os = "netbsd", target_os = "openbsd")) {
+    if cfg!(any(
+        target_os = "linux",
+        target_os = "freebsd",
+        target_os = "dragonfly",
+        target_os = "netbsd",
+        target_os = "openbsd"
+    )) {
         let set = |k: &str| std::env::var_os(k).is_some_and(|v| !v.is_empty());
         set("DISPLAY") || set("WAYLAND_DISPLAY")
     } else {

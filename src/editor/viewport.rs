@@ -162,7 +162,11 @@ pub struct ViewportResources {
 }
 
 impl ViewportResources {
-    pub fn new(ctx: GpuContext, lib: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<ViewportResources, GpuError> {
+    pub fn new(
+        ctx: GpuContext,
+        lib: &ShaderLibrary,
+        format: wgpu::TextureFormat,
+    ) -> Result<ViewportResources, GpuError> {
         let display = DisplayPipeline::new(&ctx, lib, format)?;
         let uniforms = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("editor::Display::uniforms"),
@@ -274,7 +278,8 @@ impl ViewportResources {
             Shown::Scatter => self.renderer.scatter_texture(),
         };
         let Some(texture) = texture else { return };
-        let view = texture.create_view(&wgpu::TextureViewDescriptor { label: Some("editor::Display::image"), ..Default::default() });
+        let view = texture
+            .create_view(&wgpu::TextureViewDescriptor { label: Some("editor::Display::image"), ..Default::default() });
         self.bind_group = Some(self.renderer.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("editor::Display::bind_group"),
             layout: &self.display.layout,

@@ -58,13 +58,11 @@ impl ShaderLibrary {
     /// Uses `dir` when given; otherwise `$EPIVOX_SHADER_DIR`, then `./shaders` and the crate's own
     /// `shaders/` folder when they exist; otherwise only the embedded copies.
     pub fn new(dir: Option<PathBuf>) -> ShaderLibrary {
-        let dir = dir
-            .or_else(|| std::env::var_os("EPIVOX_SHADER_DIR").map(PathBuf::from))
-            .or_else(|| {
-                [PathBuf::from("shaders"), Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")]
-                    .into_iter()
-                    .find(|d| d.join("common.wgsl").is_file())
-            });
+        let dir = dir.or_else(|| std::env::var_os("EPIVOX_SHADER_DIR").map(PathBuf::from)).or_else(|| {
+            [PathBuf::from("shaders"), Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")]
+                .into_iter()
+                .find(|d| d.join("common.wgsl").is_file())
+        });
         ShaderLibrary { dir }
     }
 
@@ -138,12 +136,11 @@ impl ShaderLibrary {
             (file, line, col as u32)
         };
         let module = naga::front::wgsl::parse_str(&src).map_err(|e| {
-            let (file, line, column) =
-                e.labels().next().map(|(s, _)| locate(s.to_range().map(|r| r.start).unwrap_or(0))).unwrap_or((
-                    name.to_string(),
-                    0,
-                    0,
-                ));
+            let (file, line, column) = e
+                .labels()
+                .next()
+                .map(|(s, _)| locate(s.to_range().map(|r| r.start).unwrap_or(0)))
+                .unwrap_or((name.to_string(), 0, 0));
             ShaderError::Invalid { file, line, column, message: e.message().to_string() }
         })?;
         let mut v = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all());

@@ -26,7 +26,10 @@ impl Composite {
                 storage_texture_entry(4, Self::OUTPUT),
             ],
         });
-        Ok(Composite { pipelines: SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light), layout })
+        Ok(Composite {
+            pipelines: SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light),
+            layout,
+        })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.

@@ -57,7 +57,14 @@ impl Cull {
             })
         };
         Ok(Cull {
-            pipelines: SpecialisedCompute::new(device, "Cull", module, &layout, ["cull", "cull_finish"], Specialised::Light),
+            pipelines: SpecialisedCompute::new(
+                device,
+                "Cull",
+                module,
+                &layout,
+                ["cull", "cull_finish"],
+                Specialised::Light,
+            ),
             layout,
             counters: buffer("Cull::counters", 16, wgpu::BufferUsages::empty()),
             draw_args: buffer("Cull::draw_args", 16, wgpu::BufferUsages::INDIRECT),

@@ -91,10 +91,17 @@ impl FrameSetup {
 
     /// With `prune == false` (`--no-prune`) the planes cover the full circle and the rays the full
     /// half-turn of gamma, whatever the frame sees (the bins keep the casters' range).
-    pub fn with_pruning(scene: &Scene, width: u32, height: u32, method: Method, prune: bool) -> Result<FrameSetup, FrameError> {
+    pub fn with_pruning(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        method: Method,
+        prune: bool,
+    ) -> Result<FrameSetup, FrameError> {
         let cam = &scene.camera;
         let aspect = width as f64 / height as f64;
-        let frame = EpipolarFrame::new(cam.eye.as_dvec3(), LightGeom::from(&scene.light)).ok_or(FrameError::EyeOnLight)?;
+        let frame =
+            EpipolarFrame::new(cam.eye.as_dvec3(), LightGeom::from(&scene.light)).ok_or(FrameError::EyeOnLight)?;
         let bounds: Aabb = scene.bounds();
         let mut mapping = GridMapping::fit(&frame, cam, aspect, &bounds, scene.grid);
         if !prune {

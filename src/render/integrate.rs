@@ -27,7 +27,17 @@ impl Integrate {
                 storage_texture_entry(4, Self::OUTPUT),
             ],
         });
-        Ok(Integrate { pipelines: SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightAndPhase), layout })
+        Ok(Integrate {
+            pipelines: SpecialisedCompute::new(
+                device,
+                "Integrate",
+                module,
+                &layout,
+                ["main"],
+                Specialised::LightAndPhase,
+            ),
+            layout,
+        })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.

@@ -96,7 +96,12 @@ pub struct PruneReport {
 impl RenderOutput {
     /// The frame's description without the images.
     pub fn info(&self) -> FrameInfo {
-        FrameInfo { timings: self.timings.clone(), setup: self.setup, passes: self.passes.clone(), variant: self.variant }
+        FrameInfo {
+            timings: self.timings.clone(),
+            setup: self.setup,
+            passes: self.passes.clone(),
+            variant: self.variant,
+        }
     }
 
     pub fn total_ms(&self) -> f64 {
@@ -351,11 +356,43 @@ impl Renderer {
         let d = &self.ctx.device;
         use wgpu::TextureUsages as U;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let radiance = texture_2d(d, "Renderer::surface_radiance", width, height, 1, Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
-        let distance = texture_2d(d, "Renderer::surface_distance", width, height, 1, Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let radiance = texture_2d(
+            d,
+            "Renderer::surface_radiance",
+            width,
+            height,
+            1,
+            Surface::RADIANCE,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+        );
+        let distance = texture_2d(
+            d,
+            "Renderer::surface_distance",
+            width,
+            height,
+            1,
+            Surface::DISTANCE,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+        );
         let depth = texture_2d(d, "Renderer::depth", width, height, 1, Surface::DEPTH, U::RENDER_ATTACHMENT);
-        let scatter = texture_2d(d, "Renderer::scatter", width, height, 1, Integrate::OUTPUT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC);
-        let hdr = texture_2d(d, "Renderer::hdr", width, height, 1, Composite::OUTPUT, U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC);
+        let scatter = texture_2d(
+            d,
+            "Renderer::scatter",
+            width,
+            height,
+            1,
+            Integrate::OUTPUT,
+            U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
+        );
+        let hdr = texture_2d(
+            d,
+            "Renderer::hdr",
+            width,
+            height,
+            1,
+            Composite::OUTPUT,
+            U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
+        );
         self.targets = Some(Targets {
             width,
             height,
@@ -391,7 +428,13 @@ impl Renderer {
     /// Renders one frame of `scene` at `width x height` into the GPU targets
     /// ([`Renderer::hdr_texture`], [`Renderer::scatter_texture`]) without reading the images back:
     /// what an interactive viewer calls every frame.
-    pub fn render_frame(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameInfo, GpuError> {
+    pub fn render_frame(
+        &mut self,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        method: Method,
+    ) -> Result<FrameInfo, GpuError> {
         if self.geometry.as_ref().is_none_or(|(_, n)| *n != scene.triangle_count()) {
             self.set_scene(scene);
         }
@@ -438,7 +481,11 @@ impl Renderer {
         let surface_bg = bind(
             "Surface::bind_group",
             &self.passes.surface.layout,
-            &[frame.clone(), self.shadow_uniforms.as_entire_binding(), R::TextureView(&self.passes.shadow_map.map_view)],
+            &[
+                frame.clone(),
+                self.shadow_uniforms.as_entire_binding(),
+                R::TextureView(&self.passes.shadow_map.map_view),
+            ],
         );
         let cull = &self.passes.cull;
         let cull_bg = bind(
@@ -466,8 +513,11 @@ impl Renderer {
             ],
         );
         let scan_bg = bind("Scan::bind_group", &self.passes.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
-        let table_bg =
-            bind("ScatterTable::bind_group", &self.passes.scatter_table.layout, &[frame.clone(), self.table.as_entire_binding()]);
+        let table_bg = bind(
+            "ScatterTable::bind_group",
+            &self.passes.scatter_table.layout,
+            &[frame.clone(), self.table.as_entire_binding()],
+        );
         let integrate_bg = bind(
             "Integrate::bind_group",
             &self.passes.integrate.layout,

@@ -33,7 +33,18 @@ impl Ranges {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Ranges { pipelines: SpecialisedCompute::new(device, "Ranges", module, &layout, ["reduce", "finish"], Specialised::Light), layout, result })
+        Ok(Ranges {
+            pipelines: SpecialisedCompute::new(
+                device,
+                "Ranges",
+                module,
+                &layout,
+                ["reduce", "finish"],
+                Specialised::Light,
+            ),
+            layout,
+            result,
+        })
     }
 
     /// Builds the pipelines specialised to `variant` unless they exist.

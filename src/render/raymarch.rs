@@ -61,7 +61,18 @@ impl Raymarch {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Raymarch { pipelines: SpecialisedCompute::new(device, "Raymarch", module, &layout, ["main"], Specialised::LightAndPhase), layout, uniforms })
+        Ok(Raymarch {
+            pipelines: SpecialisedCompute::new(
+                device,
+                "Raymarch",
+                module,
+                &layout,
+                ["main"],
+                Specialised::LightAndPhase,
+            ),
+            layout,
+            uniforms,
+        })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.

@@ -29,7 +29,17 @@ impl ScatterTable {
                 storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        Ok(ScatterTable { pipelines: SpecialisedCompute::new(device, "ScatterTable", module, &layout, ["main"], Specialised::LightAndPhase), layout })
+        Ok(ScatterTable {
+            pipelines: SpecialisedCompute::new(
+                device,
+                "ScatterTable",
+                module,
+                &layout,
+                ["main"],
+                Specialised::LightAndPhase,
+            ),
+            layout,
+        })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.

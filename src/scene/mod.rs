@@ -108,7 +108,14 @@ fn default_far() -> f32 {
 
 impl Default for Camera {
     fn default() -> Self {
-        Camera { eye: Vec3::new(0.0, 1.0, 5.0), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.01, far: 1000.0 }
+        Camera {
+            eye: Vec3::new(0.0, 1.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 45.0,
+            near: 0.01,
+            far: 1000.0,
+        }
     }
 }
 

@@ -19,7 +19,14 @@ impl Default for AccuracyPanel {
 
 impl AccuracyPanel {
     /// `stale`: the look changed since the result was measured.
-    pub fn show(&mut self, ui: &mut egui::Ui, job: Option<&AccuracyJob>, result: Option<&AccuracyResult>, stale: bool, out: &mut Vec<Command>) {
+    pub fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        job: Option<&AccuracyJob>,
+        result: Option<&AccuracyResult>,
+        stale: bool,
+        out: &mut Vec<Command>,
+    ) {
         ui.label(
             egui::RichText::new(
                 "Renders the exact CPU reference of this view at a reduced size in the background, then compares the \
@@ -39,14 +46,13 @@ impl AccuracyPanel {
             }
             None => {
                 ui.horizontal(|ui| {
-                    egui::ComboBox::new("accuracy-width", "reference size").selected_text(format!("{} px wide", self.width)).show_ui(
-                        ui,
-                        |ui| {
+                    egui::ComboBox::new("accuracy-width", "reference size")
+                        .selected_text(format!("{} px wide", self.width))
+                        .show_ui(ui, |ui| {
                             for w in [48u32, 96, 160, 256] {
                                 ui.selectable_value(&mut self.width, w, format!("{w} px wide"));
                             }
-                        },
-                    );
+                        });
                     if ui.button("Measure accuracy").clicked() {
                         out.push(Command::StartAccuracy { width: self.width });
                     }

@@ -102,7 +102,11 @@ impl LightPanel {
                 if r1.changed() || r2.changed() {
                     let (a, e) = (azimuth.to_radians(), elevation.to_radians());
                     let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
-                    let k = if r1.changed() { super::super::command::merge_key(&r1) } else { super::super::command::merge_key(&r2) };
+                    let k = if r1.changed() {
+                        super::super::command::merge_key(&r1)
+                    } else {
+                        super::super::command::merge_key(&r2)
+                    };
                     out.push(Command::SetLight(Light::Directional { direction: dir, irradiance }, k));
                 }
                 ui.horizontal(|ui| {

@@ -74,7 +74,9 @@ impl PhasePanel {
             .show_axes([false, false])
             .show(ui, |p| {
                 p.line(Line::new("isotropic", PlotPoints::from(circle)).color(egui::Color32::from_gray(110)));
-                p.line(Line::new(Phase::KINDS[kind], PlotPoints::from(lobe)).color(egui::Color32::from_rgb(255, 170, 60)));
+                p.line(
+                    Line::new(Phase::KINDS[kind], PlotPoints::from(lobe)).color(egui::Color32::from_rgb(255, 170, 60)),
+                );
             });
         ui.label(
             egui::RichText::new(format!(

@@ -51,7 +51,10 @@ pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
             m.z_hi.to_degrees()
         ));
     } else {
-        v.push(format!("bins: distance from the axis {:.3} to {:.3} unit; no scatter table (directional light)", m.z_lo, m.z_hi));
+        v.push(format!(
+            "bins: distance from the axis {:.3} to {:.3} unit; no scatter table (directional light)",
+            m.z_lo, m.z_hi
+        ));
     }
     v
 }
@@ -90,7 +93,10 @@ impl StatsPanel {
             ui.label("no frame rendered yet");
             return;
         };
-        ui.label(format!("last render: {}×{}, {:.1} ms wall (record + GPU + readback of timestamps)", r.width, r.height, r.render_ms));
+        ui.label(format!(
+            "last render: {}×{}, {:.1} ms wall (record + GPU + readback of timestamps)",
+            r.width, r.height, r.render_ms
+        ));
         let info = match &r.result {
             Ok(info) => Some(info),
             Err(e) => {
@@ -100,7 +106,11 @@ impl StatsPanel {
         };
         let Some(info) = info else { return };
         if info.timings.is_empty() {
-            ui.label(if timestamps { "no GPU timings for this frame" } else { "no GPU timings: the adapter has no encoder timestamps" });
+            ui.label(if timestamps {
+                "no GPU timings for this frame"
+            } else {
+                "no GPU timings: the adapter has no encoder timestamps"
+            });
         } else {
             egui::Grid::new("stats-passes").num_columns(2).striped(true).show(ui, |ui| {
                 for t in &info.timings {
@@ -113,7 +123,10 @@ impl StatsPanel {
                 ui.end_row();
             });
         }
-        ui.label(format!("grid memory: {} (+ the same again while the inspector keeps the geometry grid)", bytes(grid_bytes)));
+        ui.label(format!(
+            "grid memory: {} (+ the same again while the inspector keeps the geometry grid)",
+            bytes(grid_bytes)
+        ));
         let lines = match &r.prune {
             Some(p) => prune_lines(p, point_light),
             None => savings(&info.setup, point_light),
