@@ -23,6 +23,7 @@ pub mod bench;
 pub mod check;
 pub mod editor;
 pub mod epipolar;
+pub mod fsx;
 pub mod gpu;
 pub mod image;
 pub mod metrics;

@@ -121,6 +121,29 @@ impl Phase {
     /// All kinds, in UI order, with their file names.
     pub const KINDS: [&'static str; 5] = ["isotropic", "henyey-greenstein", "schlick", "cornette-shanks", "rayleigh"];
 
+    /// The phase function of kind `id` ([`Phase::id`], the index in [`Phase::KINDS`]) with asymmetry
+    /// `g` where the kind has one; `None` for an unknown id.
+    pub fn of_kind(id: u32, g: f32) -> Option<Phase> {
+        Some(match id {
+            0 => Phase::Isotropic,
+            1 => Phase::HenyeyGreenstein { g },
+            2 => Phase::Schlick { g },
+            3 => Phase::CornetteShanks { g },
+            4 => Phase::Rayleigh,
+            _ => return None,
+        })
+    }
+
+    /// The kind's file name (`henyey-greenstein`), as in [`Phase::KINDS`].
+    pub fn kind_name(&self) -> &'static str {
+        Self::KINDS[self.id() as usize]
+    }
+
+    /// Whether the kind has an asymmetry parameter `g`.
+    pub fn has_g(&self) -> bool {
+        matches!(self, Phase::HenyeyGreenstein { .. } | Phase::Schlick { .. } | Phase::CornetteShanks { .. })
+    }
+
     /// Stable small integer used by the shaders (`PHASE_*` in `common.wgsl`).
     pub fn id(&self) -> u32 {
         match self {
@@ -431,6 +454,49 @@ impl Default for Grid {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The ray-marching baseline
+// ---------------------------------------------------------------------------------------------
+
+/// Settings of the ray-marching baseline (`--method raymarch`, the editor's "ray march"): `steps`
+/// samples per view ray, each with one lookup in a `shadow_map`-texel shadow map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Baseline {
+    pub steps: u32,
+    pub shadow_map: u32,
+    /// Offset the steps by a per-pixel random fraction (noise instead of banding).
+    pub jitter: bool,
+}
+
+impl Baseline {
+    pub const STEPS: Spec = Spec {
+        name: "steps",
+        unit: "",
+        min: 1.0,
+        max: 4096.0,
+        doc: "Samples per view ray of the ray-marching baseline, each with one shadow-map lookup.",
+    };
+    pub const SHADOW_MAP: Spec = Spec {
+        name: "shadow-map",
+        unit: "texels",
+        min: 64.0,
+        max: 16384.0,
+        doc: "Texels per side of the shadow map (surface shadows, and the baseline's visibility).",
+    };
+
+    pub fn validate(&self) -> Result<(), ParamError> {
+        Self::STEPS.check(self.steps as f64)?;
+        Self::SHADOW_MAP.check(self.shadow_map as f64)
+    }
+}
+
+impl Default for Baseline {
+    fn default() -> Self {
+        Baseline { steps: 64, shadow_map: 2048, jitter: false }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Image / tone mapping
 // ---------------------------------------------------------------------------------------------
 
@@ -500,6 +566,16 @@ mod tests {
             let i = sphere_integral(&p);
             assert!((i - 1.0).abs() < 1e-4, "{p:?} integrates to {i}");
         }
+    }
+
+    #[test]
+    fn phase_kinds_round_trip() {
+        for (i, name) in Phase::KINDS.iter().enumerate() {
+            let p = Phase::of_kind(i as u32, 0.25).unwrap();
+            assert_eq!((p.id() as usize, p.kind_name()), (i, *name));
+            assert_eq!(p.g(), if p.has_g() { 0.25 } else { 0.0 });
+        }
+        assert!(Phase::of_kind(Phase::KINDS.len() as u32, 0.0).is_none());
     }
 
     #[test]
