@@ -1,55 +1,168 @@
-// cull.wgsl: the triangles that can shadow a visible point, and their rectangles (DESIGN 6).
+// cull.wgsl: which triangles can shadow a visible point, and the balanced work list Voxelize runs.
 //
-// One thread per triangle: its epipolar bounding rectangles (triangle_bounds.wgsl) and its z range.
-// A triangle is dropped when it lies outside the visible wedge of planes, past the last visible
-// ray, or outside the bins' z range (beyond the farthest visible depth the Ranges pass found).
-// Kept triangles are appended to a list the Voxelize pass draws with an indirect draw
-// (12 vertices each); the Scan's indirect dispatch is empty when nothing was kept.
+// `cull` (one thread per triangle): the triangle's footprint in light space, i.e. the planes x
+// whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
+// conservative cell range, two ranges across the seam at phi = 0, all planes when the axis pierces
+// it) times the 32-bit words of bins whose centre z its z range holds. A triangle is dropped when
+// that footprint is empty: outside the visible wedge, past the last visible ray, or outside the
+// bins' z range (beyond the farthest visible depth that the Ranges pass found). Kept triangles
+// get a record and a work count
+//
+//   items(t) = planes(t) * words(t)          (one item = one plane x one word of one triangle)
+//
+// `offsets_local` and `offsets_blocks` turn the counts into exclusive prefix sums (1024 per
+// workgroup, then the block sums in one workgroup), and `offsets_blocks` writes Voxelize's
+// indirect dispatch for the total: every item gets one thread, so a wall that covers every plane
+// is spread over thousands of threads and a sliver costs one or two.
 
 #import common
 #import triangle_bounds
 
 @group(0) @binding(0) var<uniform> f: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
-@group(0) @binding(2) var<storage, read_write> kept: array<u32>;
-@group(0) @binding(3) var<storage, read_write> kept_rects: array<vec4f>;
-// [0] kept, [1] culled by z (beyond the farthest visible depth or outside the casters' range),
-// [2] culled by rays or planes (outside the visible wedge or past the last visible ray).
-@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 4>;
-// DrawIndirect arguments: vertex_count, instance_count, first_vertex, first_instance.
-@group(0) @binding(5) var<storage, read_write> draw_args: array<atomic<u32>, 4>;
-// Scan's DispatchIndirect arguments: no workgroups at all when no triangle was kept.
-@group(0) @binding(6) var<storage, read_write> scan_args: array<u32, 3>;
+// Per kept triangle: (triangle, first plane, planes, first word | words << 16).
+@group(0) @binding(2) var<storage, read_write> records: array<vec4u>;
+// Per kept triangle: items, then (after offsets_local) the exclusive prefix sum within its block.
+@group(0) @binding(3) var<storage, read_write> offsets: array<u32>;
+// Per block of 1024 kept triangles: the sum of its items, then (after offsets_blocks) the
+// exclusive prefix sum of the blocks.
+@group(0) @binding(4) var<storage, read_write> blocks: array<u32>;
+// [0] kept (this chunk), [1] culled by z, [2] culled by rays or planes, [3] items (this chunk),
+// [4] kept (all chunks), [5] items (all chunks), [6] items dropped because the list overflowed.
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
+// DispatchIndirect arguments: [3..6] Voxelize, [6..9] Scan ([0..3] unused).
+@group(0) @binding(6) var<storage, read_write> dispatch: array<u32, 12>;
+
+const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (256 threads x 4)
+const VOXEL_GROUP: u32 = 64u; // Voxelize's workgroup size
+const MAX_GROUPS: u32 = 65535u;
+
+// Bins whose sample lies in [z.x, z.y], as a word range (first, count); count 0 when none.
+// Samples sit a quarter bin either side of the centres (bin_offset), and a quarter bin of margin
+// more on each side covers f32 differences: this range is computed from the triangle's edges,
+// Voxelize's exact per-plane ranges may differ in the last bits, and an item too many only costs a
+// thread that finds nothing.
+fn word_range(z: vec2f) -> vec2u {
+    let bins = f32(f.grid.z);
+    let k0 = max(ceil(bin_coord(f, z.x) - 1.0), 0.0);
+    let k1 = min(floor(bin_coord(f, z.y)), bins - 1.0);
+    if (!(k0 <= k1)) { return vec2u(0u, 0u); } // also catches NaN
+    let w0 = u32(k0) / 32u;
+    let w1 = u32(k1) / 32u;
+    return vec2u(w0, w1 - w0 + 1u);
+}
 
 @compute @workgroup_size(64)
 fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let count = arrayLength(&tris) / 3u;
+    // Meshes past the adapter's largest binding come in chunks: `tris` is this chunk's, and the
+    // records hold indices into it.
     let tri = id.x + id.y * groups.x * 64u;
-    if (tri >= count) { return; }
+    if (tri >= arrayLength(&tris) / 3u) { return; }
     let rects = triangle_rects(tri);
     if (rects.a.x >= rects.a.z) {
         atomicAdd(&counters[2], 1u);
         return;
     }
     let z = triangle_z_range(tri);
-    let bins = f32(f.grid.z);
-    if (bin_coord(f, z.y) < 0.0 || bin_coord(f, z.x) >= bins || z.x > z.y) {
+    let words = word_range(z);
+    if (words.y == 0u) {
         atomicAdd(&counters[1], 1u);
         return;
     }
-    let i = atomicAdd(&counters[0], 1u);
-    kept[i] = tri;
-    kept_rects[2u * i] = rects.a;
-    kept_rects[2u * i + 1u] = rects.b;
-    atomicAdd(&draw_args[0], 12u);
+    // Planes as one range, wrapping past the last plane when the planes cover the full circle.
+    var x0 = u32(rects.a.x);
+    var nx = u32(rects.a.z) - x0;
+    if (rects.b.x < rects.b.z) { nx += u32(rects.b.z) - u32(rects.b.x); }
+    nx = min(nx, f.grid.x);
+    let items = nx * words.y;
+    let slot = atomicAdd(&counters[0], 1u);
+    records[slot] = vec4u(tri, x0, nx, words.x | (words.y << 16u));
+    offsets[slot] = items;
 }
 
 @compute @workgroup_size(1)
 fn cull_finish() {
-    atomicStore(&draw_args[1], 1u);
-    let columns = f.grid.x * f.grid.w;
-    scan_args[0] = select(0u, (columns + 63u) / 64u, atomicLoad(&counters[0]) > 0u);
-    scan_args[1] = 1u;
-    scan_args[2] = 1u;
+    atomicAdd(&counters[4], atomicLoad(&counters[0]));
 }
 
+// ---- exclusive prefix sum of the items -------------------------------------------------------
+
+var<workgroup> partial: array<u32, 256>;
+var<workgroup> block_count: u32;
+
+// Inclusive scan of `partial` over the workgroup (Hillis-Steele; 8 steps for 256).
+fn scan_partial(lid: u32) {
+    for (var step = 1u; step < 256u; step <<= 1u) {
+        workgroupBarrier();
+        var add = 0u;
+        if (lid >= step) { add = partial[lid - step]; }
+        workgroupBarrier();
+        partial[lid] += add;
+    }
+    workgroupBarrier();
+}
+
+@compute @workgroup_size(256)
+fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
+    // Dispatched for every triangle of the chunk: blocks past the kept ones have nothing to do.
+    if (wg.x >= workgroupUniformLoad(&block_count)) { return; }
+    let kept = atomicLoad(&counters[0]);
+    let base = wg.x * BLOCK + lid * 4u;
+    var v = vec4u(0u);
+    for (var i = 0u; i < 4u; i++) {
+        if (base + i < kept) { v[i] = offsets[base + i]; }
+    }
+    // Sums saturate: a list past 2^32 items is cut (counted in counters[6]) rather than wrapped.
+    let s1 = sat_add(v.x, v.y);
+    let s2 = sat_add(s1, v.z);
+    let s3 = sat_add(s2, v.w);
+    partial[lid] = s3;
+    scan_partial(lid);
+    var before = 0u;
+    if (lid > 0u) { before = partial[lid - 1u]; }
+    let ex = vec4u(before, sat_add(before, v.x), sat_add(before, s1), sat_add(before, s2));
+    for (var i = 0u; i < 4u; i++) {
+        if (base + i < kept) { offsets[base + i] = ex[i]; }
+    }
+    if (lid == 255u) { blocks[wg.x] = partial[255]; }
+}
+
+fn sat_add(a: u32, b: u32) -> u32 {
+    let s = a + b;
+    return select(s, 0xffffffffu, s < a);
+}
+
+@compute @workgroup_size(256)
+fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
+    // The loop holds barriers: its bound must be uniform across the workgroup.
+    let n = workgroupUniformLoad(&block_count);
+    var carry = 0u;
+    for (var start = 0u; start < n; start += 256u) {
+        var v = 0u;
+        if (start + lid < n) { v = blocks[start + lid]; }
+        partial[lid] = v;
+        scan_partial(lid);
+        if (start + lid < n) { blocks[start + lid] = sat_add(carry, partial[lid] - v); }
+        carry = sat_add(carry, partial[255]);
+        workgroupBarrier();
+    }
+    if (lid == 0u) {
+        // A saturated total cannot be told from a true one: cap the list below it and count what is cut.
+        let total = min(carry, 0xffffffffu - VOXEL_GROUP);
+        if (carry == 0xffffffffu) { atomicAdd(&counters[6], 1u); }
+        atomicStore(&counters[3], total);
+        atomicAdd(&counters[5], total);
+        let groups = (total + VOXEL_GROUP - 1u) / VOXEL_GROUP;
+        let gx = min(groups, MAX_GROUPS);
+        dispatch[3] = gx;
+        dispatch[4] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
+        dispatch[5] = 1u;
+        // Scan: nothing to carry when no triangle was kept anywhere.
+        let columns = f.grid.x * f.grid.w;
+        dispatch[6] = select(0u, (columns + 63u) / 64u, atomicLoad(&counters[4]) > 0u);
+        dispatch[7] = 1u;
+        dispatch[8] = 1u;
+    }
+}

@@ -1,17 +1,30 @@
 // integrate.wgsl: per-pixel single scattering from the shadow volume.
 //
-// For the pixel's view ray (plane phi, angle gamma, surface at t_s) the lit part of the ray is
-// [0, t_s] minus the shadowed bins of the ray's bit words. We walk the *runs* of set bits only, so
-// the cost grows with the number of shadow boundaries, not with the number of bins:
+// A pixel's view ray (plane phi, angle gamma, surface at t_s) runs over [z_start, z_end] in z (psi
+// at a point light, r = t sin(gamma) for a directional one). With U(z) the cumulative unshadowed
+// in-scattering along the ray,
 //
-//   point light:  L = sigma_s I0 / h * (G(psi_s) - sum_runs [G(psi_b) - G(psi_a)])      (scatter_table.wgsl)
-//   directional:  L = sigma_s E0 p(cos gamma) * (I(t_0, t_1) - sum_runs I(t_a, t_b)),
-//                 I(a, b) = integral_a^b exp(-sigma_t (l(t) + m(t))) dt in closed form: l (path
-//                 to the light inside the medium box) and m (view path inside the box) are
-//                 piecewise linear in t, so each piece is exp(-sigma_t g_min) * len * (1 - e^-x) / x.
+//   point light:  U(psi) = sigma_s I0 / h * G(gamma, psi)                    (scatter_table.wgsl)
+//   directional:  U(r)   = sigma_s E0 p(gamma) * integral_{t_in}^{r / sin gamma} exp(-sigma_t (l(t) + t - t_in)) dt
 //
-// The four grid rays around the pixel's (plane, ray) coordinate are evaluated with the pixel's own
-// gamma and t_s and blended bilinearly, which hides the grid's rays and planes.
+// (l: the path toward the light inside the medium's box; piecewise linear in t, so U is a sum of
+// closed-form pieces built once per pixel; U(z_start) = 0), the lit part is
+//
+//   L = sum_j q_j (C(z_{j+1}) - C(z_j)) = sum_j C(z_j) (q_{j-1} - q_j),   C(z) = U(clamp(z, z_start, z_end)),
+//
+// plus the stretches outside the bins' range, which no caster reaches. q_j in [0, 1] is bin j's
+// lit fraction, blended bilinearly over the four grid rays around the pixel's (plane, ray)
+// coordinate (hiding the grid's planes and rays), and q_{-1} = q_B = 0. The sum runs only over the
+// bins where q changes: the union of the four rays' shadow boundaries, found with bit operations
+// per 32-bit word, so empty and fully shadowed words cost one test and the cost grows with the
+// number of shadow boundaries, not with the bins or the four rays. It sums lit light directly
+// (never "total minus shadowed"), so a fully shadowed ray is exactly 0.
+//
+// Own shadow: where the light is behind the surface at the end of the ray, the thin layer of
+// medium in front of it is in that surface's shadow, but the grid's neighbouring samples (up to a
+// plane and 3/4 bin from the pixel's own light rays) may meet the surface just after the pixel's
+// gamma. Within one such cell of the surface the layer is taken as shadowed: for a convex closed
+// surface around the light this is exact (no light leaks), elsewhere it errs by under a cell.
 
 #import common
 
@@ -21,7 +34,7 @@
 @group(0) @binding(3) var distance: texture_2d<f32>;
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
 
-// ---- point light ---------------------------------------------------------------------------
+// ---- point light: the scatter table ----------------------------------------------------------
 
 fn table_row(row: u32, u: f32) -> vec3f {
     let cols = f.table.y;
@@ -48,105 +61,177 @@ fn table_g(gamma: f32, psi: f32) -> vec3f {
     return mix(table_row(r0, u), table_row(r0 + 1u, u), wy);
 }
 
-// Unshadowed weight of [0, psi_s] minus the shadowed runs of one grid ray.
-// Shadow runs are cut at psi_cut: the start of the surface's own bin when the surface faces the
-// light on the eye's side (that bin is set by the surface itself), psi_s otherwise.
-fn lit_point(base: u32, gamma: f32, psi_s: f32, psi_cut: f32) -> vec3f {
-    var total = table_g(gamma, psi_s);
-    let bins = f.grid.z;
-    for (var w = 0u; w < f.grid.w; w++) {
-        var bits = grid[base + w];
-        loop {
-            if (bits == 0u) { break; }
-            let start = firstTrailingBit(bits);
-            let run = countTrailingZeros(~(bits >> start));
-            let k0 = w * 32u + start;
-            let psi_a = z_of_bin(f, f32(k0));
-            if (psi_a >= psi_cut) { return total; }
-            let psi_b = min(z_of_bin(f, f32(k0 + run)), psi_cut);
-            total -= table_g(gamma, psi_b) - table_g(gamma, psi_a);
-            if (start + run >= 32u) { break; }
-            bits = bits & ~(((1u << run) - 1u) << start);
-        }
-    }
-    return total;
+// ---- directional light: U along the view ray in closed-form pieces ---------------------------
+
+// l(t) = min_i (alpha_i + beta_i t) is the distance from E + t v to the medium box's exit toward
+// the light; between the breakpoints of the min it is linear, so on a piece starting at p the
+// exponent g(t) = l(t) + t - t_in is linear too, g = g_p + k (t - p), k = dl/dt + 1 (of either
+// sign: moving along a face, the exit toward a grazing light can shrink faster than t grows), and
+//   integral_p^t exp(-sigma_t g) = exp(-sigma_t min(g_p, g_t)) (t - p) E(sigma_t |k| (t - p)),
+// E(x) = (1 - e^-x) / x: the exponent is taken at its smaller end, so E's argument is >= 0.
+struct Pieces {
+    start: array<f32, 4>,
+    g: array<f32, 4>,
+    k: array<f32, 4>,
+    cum: array<vec3f, 4>,
+    count: u32,
 }
 
-// ---- directional light ---------------------------------------------------------------------
+var<private> pieces: Pieces;
 
-// integral_a^b exp(-sigma_t (l(t) + t - t_in)) dt along ray v, with l the exit distance toward the
-// light from E + t v inside the medium box; [a, b] lies inside the box span starting at t_in.
-fn box_integral(v: vec3f, t_in: f32, a: f32, b: f32) -> vec3f {
-    if (b <= a) { return vec3f(0.0); }
+fn piece_integral(i: u32, t: f32) -> vec3f {
+    let len = max(t - pieces.start[i], 0.0);
+    let sigma_t = f.sigma_t.xyz;
+    let k = pieces.k[i];
+    let g_min = max(0.0, pieces.g[i] + min(k, 0.0) * len);
+    return exp(-sigma_t * g_min) * len * one_minus_exp_over_x(sigma_t * (abs(k) * len));
+}
+
+// Builds the pieces of [t_in, t_end] along v.
+fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
     let w = safe_dir(f.light.xyz);
     let e = f.eye.xyz;
     let bound = select(f.medium_min.xyz, f.medium_max.xyz, w > vec3f(0.0));
-    // l(t) = min_i (alpha_i + beta_i t)
     let alpha = (bound - e) / w;
     let beta = -v / w;
-    // Breakpoints of the minimum inside (a, b), sorted.
-    var cuts = array<f32, 5>(a, b, b, b, b);
+    // Breakpoints of the minimum inside (t_in, t_end), sorted.
+    var cuts = array<f32, 4>(t_in, t_end, t_end, t_end);
     var n = 1u;
     for (var i = 0u; i < 3u; i++) {
         for (var j = i + 1u; j < 3u; j++) {
             let den = beta[i] - beta[j];
             if (abs(den) > 1e-12) {
                 let t = (alpha[j] - alpha[i]) / den;
-                if (t > a && t < b) { cuts[n] = t; n++; }
+                if (t > t_in && t < t_end) {
+                    cuts[n] = t;
+                    n++;
+                }
             }
         }
     }
-    cuts[n] = b;
-    n++;
-    // insertion sort of the interior cuts
-    for (var i = 1u; i < n; i++) {
+    // Insertion sort of the (at most three) interior cuts.
+    for (var i = 2u; i < n; i++) {
         var k = i;
         loop {
-            if (k == 0u || cuts[k - 1u] <= cuts[k]) { break; }
-            let tmp = cuts[k]; cuts[k] = cuts[k - 1u]; cuts[k - 1u] = tmp;
+            if (k <= 1u || cuts[k - 1u] <= cuts[k]) { break; }
+            let tmp = cuts[k];
+            cuts[k] = cuts[k - 1u];
+            cuts[k - 1u] = tmp;
             k--;
         }
     }
-    let sigma_t = f.sigma_t.xyz;
-    var sum = vec3f(0.0);
-    for (var i = 0u; i + 1u < n; i++) {
+    var cum = vec3f(0.0);
+    for (var i = 0u; i < n; i++) {
         let p0 = cuts[i];
-        let p1 = cuts[i + 1u];
-        if (p1 <= p0) { continue; }
-        let mid = 0.5 * (p0 + p1);
-        let ls = alpha + beta * mid;
-        var k = 0u;
-        if (ls.y < ls[k]) { k = 1u; }
-        if (ls.z < ls[k]) { k = 2u; }
-        let g0 = max(0.0, alpha[k] + beta[k] * p0) + p0 - t_in;
-        let g1 = max(0.0, alpha[k] + beta[k] * p1) + p1 - t_in;
-        let gmin = max(0.0, min(g0, g1));
-        let x = sigma_t * abs(g1 - g0);
-        sum += exp(-sigma_t * gmin) * (p1 - p0) * one_minus_exp_over_x(x);
+        let p1 = select(t_end, cuts[i + 1u], i + 1u < n);
+        // Which plane of the box the light path leaves through on this piece (at its middle).
+        let ls = alpha + beta * (0.5 * (p0 + p1));
+        var a = 0u;
+        if (ls.y < ls[a]) { a = 1u; }
+        if (ls.z < ls[a]) { a = 2u; }
+        pieces.start[i] = p0;
+        pieces.g[i] = max(0.0, max(0.0, alpha[a] + beta[a] * p0) + p0 - t_in);
+        pieces.k[i] = beta[a] + 1.0;
+        pieces.cum[i] = cum;
+        cum += piece_integral(i, p1);
     }
+    pieces.count = n;
+}
+
+// integral_{t_in}^{t} (t inside [t_in, t_end]).
+fn along(t: f32) -> vec3f {
+    var i = 0u;
+    for (var j = 1u; j < pieces.count; j++) {
+        if (t >= pieces.start[j]) { i = j; }
+    }
+    return pieces.cum[i] + piece_integral(i, t);
+}
+
+// ---- both: U at a bin boundary --------------------------------------------------------------
+
+struct Ray {
+    gamma: f32,
+    // The view ray's extent in z: from the eye (or the medium's box) to the surface.
+    z_start: f32,
+    z_end: f32,
+    // Directional: t = z / z_scale.
+    z_scale: f32,
+}
+
+fn cumulative(r: Ray, z: f32) -> vec3f {
+    let zc = clamp(z, r.z_start, r.z_end);
+    if (is_point_light()) { return table_g(r.gamma, zc); }
+    return along(zc / max(r.z_scale, 1e-12));
+}
+
+// sum_j C(z_j) (q_{j-1} - q_j) over one plane's two grid rays `bases` blended with `weights`;
+// bin j of the plane spans [z(j + offset), z(j + 1 + offset)] around its sample (bin_offset), the
+// first and the last extended to z(-1/4) and z(B + 1/4).
+fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32) -> vec3f {
+    var sum = vec3f(0.0);
+    // q before the first bin is 0 (the stretch below the bins is added apart), which the bits see
+    // as a set bit before bin 0: carry starts at 1.
+    var carry = vec2u(1u);
+    var q_prev = 0.0;
+    let first = u32(clamp(floor(bin_coord(f, r.z_start) - offset), 0.0, f32(f.grid.z - 1u))) / 32u;
+    if (first > 0u) {
+        // Every boundary before z_start has C = U(z_start) = 0: start from the previous word's last bit.
+        carry = vec2u(grid[bases.x + first - 1u], grid[bases.y + first - 1u]) >> vec2u(31u);
+        q_prev = dot(weights, vec2f(1u - carry));
+    }
+    for (var w = first; w < f.grid.w; w++) {
+        let b = vec2u(grid[bases.x + w], grid[bases.y + w]);
+        // Where a ray's bit differs from the one before it (bit 0 against the previous word's last).
+        var changes = (b.x ^ ((b.x << 1u) | carry.x)) | (b.y ^ ((b.y << 1u) | carry.y));
+        carry = b >> vec2u(31u);
+        loop {
+            if (changes == 0u) { break; }
+            let i = firstTrailingBit(changes);
+            changes &= changes - 1u;
+            // The first and last bins reach a quarter bin past the range on both planes (one of
+            // them by its offset, the other because its sample is the nearest there).
+            let j = w * 32u + i;
+            let z = z_of_bin(f, select(f32(j) + offset, -0.25, j == 0u));
+            if (z >= r.z_end) {
+                // Every later boundary sits at z_end: the rest telescopes to C(z_end) q_prev.
+                return sum + cumulative(r, r.z_end) * q_prev;
+            }
+            let q = dot(weights, vec2f(1u - ((b >> vec2u(i)) & vec2u(1u))));
+            sum += cumulative(r, z) * (q_prev - q);
+            q_prev = q;
+        }
+    }
+    // The boundary after the last bin.
+    return sum + cumulative(r, z_of_bin(f, f32(f.grid.z) + 0.25)) * q_prev;
+}
+
+// The lit part of the view ray: the stretches before and after the bins' range (no caster reaches
+// them), and both planes around the pixel.
+fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
+    var sum = vec3f(0.0);
+    // Both planes' bins span [z(-1/4), z(B + 1/4)] (lit_plane).
+    let z_lo = z_of_bin(f, -0.25);
+    let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
+    if (r.z_start < z_lo) { sum += cumulative(r, z_lo); }
+    if (r.z_end > z_hi) { sum += cumulative(r, r.z_end) - cumulative(r, z_hi); }
+    if (weights.x + weights.z > 0.0) { sum += lit_plane(r, bases.xz, weights.xz, bin_offset(x.x)); }
+    if (weights.y + weights.w > 0.0) { sum += lit_plane(r, bases.yw, weights.yw, bin_offset(x.y)); }
     return sum;
 }
 
-// z_scale converts a bin's z to distance along the view ray: t = z / z_scale (sin gamma for the
-// epipolar grid, cos of the angle to the view axis for the Cartesian one).
-fn lit_directional(base: u32, v: vec3f, z_scale: f32, t_in: f32, t_end: f32, t_cut: f32) -> vec3f {
-    var total = box_integral(v, t_in, t_in, t_end);
-    for (var w = 0u; w < f.grid.w; w++) {
-        var bits = grid[base + w];
-        loop {
-            if (bits == 0u) { break; }
-            let start = firstTrailingBit(bits);
-            let run = countTrailingZeros(~(bits >> start));
-            let k0 = w * 32u + start;
-            let ta = max(z_of_bin(f, f32(k0)) / max(z_scale, 1e-12), t_in);
-            if (ta >= t_cut) { return total; }
-            let tb = min(z_of_bin(f, f32(k0 + run)) / max(z_scale, 1e-12), t_cut);
-            total -= box_integral(v, t_in, ta, tb);
-            if (start + run >= 32u) { break; }
-            bits = bits & ~(((1u << run) - 1u) << start);
-        }
-    }
-    return total;
+// Where the own-shadow layer in front of a surface lit from behind begins, in z: one cell of the
+// grid from the surface at t_s, where `back` = |cos| between the view ray and the surface normal.
+// A neighbouring plane's light ray is displaced by up to r_axis * dphi (r_axis = t sin(gamma), the
+// distance from the axis) across the view ray, which is a height of that much above the surface;
+// 3/4 bin of z is displaced along the view ray (then z_of_bin below does it in z directly).
+// z_scale: z = t z_scale for a directional light (sin gamma, or the Cartesian grid's depth scale).
+fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32) -> f32 {
+    var across = t_s * sin(gamma) * f.b2.w / f32(f.grid.x);
+    if (is_cartesian(f)) { across = t_s * 2.0 * max(f.cam_right.w, f.cam_up.w) / f32(f.grid.x); }
+    let t = max(t_s - across / max(back, 1e-6), 0.0);
+    var z = t * z_scale;
+    if (is_point_light()) { z = z_along(f, gamma, t); }
+    return max(z_of_bin(f, bin_coord(f, z) - 0.75), z_start);
 }
 
 // ---- per pixel -----------------------------------------------------------------------------
@@ -168,15 +253,16 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let gc = grid_coords(f, v);
     let surface = textureLoad(distance, vec2i(id.xy), 0).xy;
     let t_s = surface.x;
-    let facing = t_s >= 0.0 && surface.y > 0.5;
+    let back = select(0.0, surface.y, t_s >= 0.0);
 
     // The four grid rays around the pixel and their bilinear weights.
     let planes = f.grid.x;
     let rays = f.grid.y;
-    // Planes blend around their centres. Rays blend from the pixel's own row toward the *next*
-    // one only: a row's bits hold every caster up to its end (inclusive scan), the previous row's
-    // may not yet hold a caster that lies just before the pixel, so blending backward would leak
-    // light through closed surfaces. Forward blending can only over-shadow, by under one row.
+    // Planes are samples at their centres and blend around them. Rays blend from the pixel's own
+    // row toward the *next* one only: a row's bits hold every caster up to its end (inclusive
+    // scan), the previous row's may not yet hold a caster that lies just before the pixel, so
+    // blending backward would leak light through closed surfaces. Forward blending can only
+    // over-shadow, by under one row.
     let xf = gc.x - 0.5;
     let yf = clamp(gc.y, 0.0, f32(rays - 1u));
     let x0f = floor(xf);
@@ -206,12 +292,10 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         let gp = max(gamma, 1e-6);
         var psi_s = PI - gp;
         if (t_s >= 0.0) { psi_s = min(z_along(f, gp, t_s), psi_s); }
-        var psi_cut = psi_s;
-        if (facing) { psi_cut = min(psi_s, z_of_bin(f, floor(bin_coord(f, psi_s)))); }
-        var lit = vec3f(0.0);
-        for (var k = 0; k < 4; k++) {
-            if (weights[k] > 0.0) { lit += weights[k] * lit_point(bases[k], gp, psi_s, psi_cut); }
-        }
+        var z_end = psi_s;
+        if (back > 0.0) { z_end = min(z_end, own_shadow_start(t_s, gp, 1.0, back, 0.0)); }
+        let r = Ray(gp, 0.0, z_end, 1.0);
+        let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
         // The table holds G / (pi - gamma); the ray's weight is (pi - gamma) / h with h = D sin(gamma).
         // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
         let x = PI - gp;
@@ -228,17 +312,14 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         var t_end = span.y;
         if (t_s >= 0.0) { t_end = min(t_end, t_s); }
         if (t_end > span.x) {
-            var lit = vec3f(0.0);
             var z_scale = sin(gamma);
             if (is_cartesian(f)) { z_scale = dot(v, f.cam_fwd.xyz); }
-            var t_cut = t_end;
-            if (facing && t_s <= t_end) {
-                let z_cut = z_of_bin(f, floor(bin_coord(f, t_s * z_scale)));
-                t_cut = clamp(z_cut / max(z_scale, 1e-12), span.x, t_end);
-            }
-            for (var k = 0; k < 4; k++) {
-                if (weights[k] > 0.0) { lit += weights[k] * lit_directional(bases[k], v, z_scale, span.x, t_end, t_cut); }
-            }
+            build_pieces(v, span.x, t_end);
+            let z_start = span.x * z_scale;
+            var z_end = t_end * z_scale;
+            if (back > 0.0 && t_s <= t_end) { z_end = min(z_end, own_shadow_start(t_s, gamma, z_scale, back, z_start)); }
+            let r = Ray(gamma, z_start, z_end, z_scale);
+            let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
             // The deflection angle is gamma: the phase of the angle keeps the lobes' peaks exact.
             let ph = phase_of_angle(f.sigma_s.w, gamma);
             l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));

@@ -7,9 +7,9 @@
 //
 // Also writes the distance t from the eye to the surface (negative for the sky): the integrate
 // pass ends each view ray there, and the composite pass attenuates L_surface by exp(-sigma_t t).
-// The second channel is 1 when the surface faces the light on the eye's side and the shadow map
-// says it is lit: then the voxel that
-// holds the surface itself does not shadow the stretch of the view ray just in front of it.
+// The second channel is |cos| between the view ray and the normal when the light is behind the
+// surface (0 otherwise): Integrate shadows the thin layer of medium in front of such a surface
+// that the surface itself shadows (integrate.wgsl, "own shadow").
 
 #import common
 
@@ -99,21 +99,21 @@ fn fs_main(i: VsOut) -> FsOut {
     var n = normalize(cross(dpdx(i.world), dpdy(i.world)));
     if (dot(n, to_eye) < 0.0) { n = -n; }
     var radiance = vec3f(0.0);
-    var facing = 0.0;
+    // Cosine of the incidence angle on the eye's side (negative: the light is behind the surface).
+    var cos_i = 0.0;
     let sigma_t = f.sigma_t.xyz;
     if (is_point_light()) {
         let d = f.light.xyz - i.world;
         let dist = length(d);
-        let cos_i = dot(n, d / dist);
+        cos_i = dot(n, d / dist);
         let r = f.light_power.w;
         let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
         var vis = 0.0;
         if (cos_i > 0.0) { vis = visibility(i.world, slope_bias(shadow.params.y * dist, cos_i)); }
-        facing = select(0.0, 1.0, vis > 0.5);
         radiance = i.albedo / PI * max(cos_i, 0.0) * e_in * vis;
     } else {
         let w = f.light.xyz;
-        let cos_i = dot(n, w);
+        cos_i = dot(n, w);
         var l = 0.0;
         let lo = f.medium_min.xyz;
         let hi = f.medium_max.xyz;
@@ -123,11 +123,13 @@ fn fs_main(i: VsOut) -> FsOut {
         let e_in = f.light_power.xyz * exp(-sigma_t * l);
         var vis = 0.0;
         if (cos_i > 0.0) { vis = visibility(i.world, slope_bias(shadow.params.y, cos_i)); }
-        facing = select(0.0, 1.0, vis > 0.5);
         radiance = i.albedo / PI * max(cos_i, 0.0) * e_in * vis;
     }
+    // Back-lit (the light behind the surface): the cosine between the view ray and the normal, with
+    // which Integrate finds the medium that the surface itself shadows; 0 when lit from the front.
+    let back = select(0.0, dot(n, normalize(to_eye)), cos_i < 0.0);
     var o: FsOut;
     o.radiance = vec4f(radiance, 1.0);
-    o.distance = vec4f(length(to_eye), facing, 0.0, 0.0);
+    o.distance = vec4f(length(to_eye), back, 0.0, 0.0);
     return o;
 }

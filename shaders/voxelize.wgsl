@@ -1,170 +1,257 @@
-// voxelize.wgsl: marks, for every grid texel (plane x, ray y), the bins z that geometry occupies.
+// voxelize.wgsl: the geometry bits of the epipolar grid, by point-sampled light rays.
 //
-// The transform to epipolar space is non-linear, so rasterizing transformed triangles gives curved
-// edges wrong and misses thin casters (no conservative rasterization on the software driver).
-// Instead a compute pass (`cull`) finds each triangle's *epipolar bounding rectangle* (two when it
-// straddles the seam at phi = 0, every plane when the eye-light axis pierces it), drops triangles
-// that cannot shadow a visible point (outside the visible wedge, past the last visible ray, or
-// outside the bins' z range), and writes the draw's indirect arguments; the render pass draws the
-// kept rectangles and every fragment tests its triangle exactly against the texel's cell:
+// The grid's planes and bins are *sample positions*: plane x is the half-plane at the angle of its
+// centre, phi_x = phi(x + 1/2), and bin k the light ray in it at the centre of its z range,
+// z_k = z(k + 1/2) (psi at a point light, the distance r from the axis for a directional one,
+// view depth for the Cartesian grid). A triangle sets
 //
-//   cell(x, y) = the pyramid from the eye spanned by the four view rays (phi_x, gamma_y),
-//                (phi_x+1, gamma_y), (phi_x+1, gamma_y+1), (phi_x, gamma_y+1)
-//   polygon    = triangle clipped to the cell (Sutherland-Hodgman against its four planes)
-//   bins       = [bin(min z over polygon), bin(max z over polygon)], z = psi or r
+//   geometry[x, y, k] = 1   where light ray (phi_x, z_k) meets it at an angle gamma in ray cell y
 //
-// The z extremes of a convex polygon lie on its edges (closed-form stationary point per edge), so a
-// surface seen edge-on marks every bin it spans and closed surfaces do not leak. Casters before the
-// first visible ray (gamma < gamma_lo) are clamped into row 0: the scan only carries them forward.
+// (every hit, not only the first, so the inspector's geometry layer shows the surfaces). The rays
+// y stay binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the
+// same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
+// light (Integrate blends rays forward only, so it never leaks through a closed surface).
+//
+// One thread per item of the Cull pass's work list: one triangle, one plane, one 32-bit word of
+// bins. In the plane, the triangle is a segment (its edges' crossings of the plane); along a
+// segment z and gamma are both monotonic, so the bins whose centre z lies in the segment's z range
+// are exactly the light rays that hit it, and the hit of each follows in closed form.
+//
+// Watertight: a crossing on an edge is computed from the edge's two vertices in a canonical order,
+// so the two triangles that share the edge get the same point bit for bit; a vertex on the plane is
+// taken as it is. Bins are counted on closed ranges, so a light ray through a shared point is hit by
+// both neighbours, and inside a closed mesh no light ray slips between two triangles.
 
 #import common
-#import triangle_bounds
 
 @group(0) @binding(0) var<uniform> f: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 @group(0) @binding(2) var<storage, read_write> grid: array<atomic<u32>>;
-// Written by the Cull pass (cull.wgsl): the kept triangles and their rectangles.
-@group(0) @binding(3) var<storage, read> kept: array<u32>;
-@group(0) @binding(4) var<storage, read> kept_rects: array<vec4f>;
+// Written by the Cull pass (cull.wgsl).
+@group(0) @binding(3) var<storage, read> records: array<vec4u>;
+@group(0) @binding(4) var<storage, read> offsets: array<u32>;
+@group(0) @binding(5) var<storage, read> blocks: array<u32>;
+@group(0) @binding(6) var<storage, read> counters: array<u32, 8>;
 
-struct VsOut {
-    @builtin(position) clip: vec4f,
-    @location(0) @interpolate(flat) tri: u32,
-}
+const BLOCK: u32 = 1024u;
 
-// ---- vertex stage: a kept triangle's rectangles ----------------------------------------------
+// ---- the work list ---------------------------------------------------------------------------
 
-@vertex
-fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
-    var o: VsOut;
-    let i = vi / 12u;
-    let corner = vi % 12u;
-    let quad = corner / 6u;
-    o.tri = kept[i];
-    let r = kept_rects[2u * i + quad];
-    if (r.x >= r.z) {
-        o.clip = vec4f(2.0, 2.0, 0.0, 1.0); // no second rectangle: a degenerate triangle
-        return o;
+// The kept triangle whose items hold `item`: the last block, then the last triangle in it, whose
+// exclusive prefix sum is at most `item` (every kept triangle has at least one item, so the sums
+// strictly increase). Returns (kept slot, item within the triangle).
+fn find_item(item: u32) -> vec2u {
+    let kept = counters[0];
+    var lo = 0u;
+    var hi = (kept + BLOCK - 1u) / BLOCK;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (blocks[mid] <= item) { lo = mid; } else { hi = mid; }
     }
-    let k = corner % 6u;
-    let cx = select(r.x, r.z, k == 1u || k == 4u || k == 5u);
-    let cy = select(r.y, r.w, k == 2u || k == 3u || k == 5u);
-    o.clip = vec4f(cx / f32(f.grid.x) * 2.0 - 1.0, 1.0 - cy / f32(f.grid.y) * 2.0, 0.0, 1.0);
-    return o;
+    let rest = item - blocks[lo];
+    var l = lo * BLOCK;
+    var h = min(kept, l + BLOCK);
+    while (h - l > 1u) {
+        let mid = (l + h) / 2u;
+        if (offsets[mid] <= rest) { l = mid; } else { h = mid; }
+    }
+    return vec2u(l, rest - offsets[l]);
 }
 
+// ---- a triangle in one plane -----------------------------------------------------------------
 
+fn vertex_less(a: vec3f, b: vec3f) -> bool {
+    if (a.x != b.x) { return a.x < b.x; }
+    if (a.y != b.y) { return a.y < b.y; }
+    return a.z < b.z;
+}
 
-// ---- fragment stage: exact triangle-cell test -------------------------------------------------
+// Where edge (a, b) crosses the plane (signed distances da, db of opposite signs), computed from
+// the vertices in a canonical order: both triangles sharing the edge get the same bits.
+fn edge_point(a: vec3f, da: f32, b: vec3f, db: f32) -> vec3f {
+    if (vertex_less(b, a)) { return b + (a - b) * (db / (db - da)); }
+    return a + (b - a) * (da / (da - db));
+}
 
-var<private> poly: array<vec3f, 10>;
-var<private> tmp: array<vec3f, 10>;
-var<private> count: u32;
+struct Segment {
+    p: vec3f,
+    q: vec3f,
+    ok: bool,
+}
 
-// Keeps the part of the polygon with dot(n, p) >= 0 (coordinates relative to the eye).
-fn clip_plane(n: vec3f) {
-    if (dot(n, n) < 1e-30) { return; } // degenerate face (the cell touches the axis)
-    var m = 0u;
-    for (var i = 0u; i < count; i++) {
-        let p = poly[i];
-        let q = poly[(i + 1u) % count];
-        let dp = dot(n, p);
-        let dq = dot(n, q);
-        if (dp >= 0.0) { tmp[m] = p; m++; }
-        if ((dp >= 0.0) != (dq >= 0.0)) {
-            tmp[m] = p + (q - p) * (dp / (dp - dq));
-            m++;
+// The segment where the plane with normal n through the eye cuts the triangle (vertices relative
+// to the eye): empty when it misses, a point when it touches a vertex, nothing for a triangle lying
+// in the plane (seen edge-on from every light ray in it; its neighbours' edges carry the surface).
+fn plane_segment(p: array<vec3f, 3>, n: vec3f) -> Segment {
+    var s = Segment(vec3f(0.0), vec3f(0.0), false);
+    let d = vec3f(dot(n, p[0]), dot(n, p[1]), dot(n, p[2]));
+    var pts: array<vec3f, 3>;
+    var count = 0u;
+    for (var i = 0u; i < 3u; i++) {
+        if (d[i] == 0.0) {
+            pts[count] = p[i];
+            count++;
         }
     }
-    count = min(m, 10u);
-    for (var i = 0u; i < count; i++) { poly[i] = tmp[i]; }
+    for (var i = 0u; i < 3u; i++) {
+        let j = (i + 1u) % 3u;
+        if ((d[i] < 0.0 && d[j] > 0.0) || (d[i] > 0.0 && d[j] < 0.0)) {
+            pts[count] = edge_point(p[i], d[i], p[j], d[j]);
+            count++;
+        }
+    }
+    if (count == 0u || count == 3u) { return s; }
+    s.p = pts[0];
+    s.q = pts[min(count, 2u) - 1u];
+    s.ok = true;
+    return s;
 }
 
-@fragment
-fn fs_main(i: VsOut) -> @location(0) vec4f {
-    let ix = u32(i.clip.x);
-    let iy = u32(i.clip.y);
+// ---- per item --------------------------------------------------------------------------------
+
+// The ray cell of gamma: -1 past the last visible ray (no visible point lies behind such a hit);
+// casters before the first visible ray go to cell 0, which the scan carries forward.
+fn ray_cell(gamma: f32) -> i32 {
+    let y = floor(ray_coord(f, gamma));
+    if (y >= f32(f.grid.y)) { return -1; }
+    return i32(max(y, 0.0));
+}
+
+fn cartesian_cell(q: vec3f) -> i32 {
+    let y = floor(grid_coords(f, normalize(q)).y);
+    if (y >= f32(f.grid.y)) { return -1; }
+    return i32(max(y, 0.0));
+}
+
+var<private> run_cell: i32;
+var<private> run_mask: u32;
+
+fn flush(x: u32, w: u32) {
+    if (run_mask != 0u && run_cell >= 0) {
+        atomicOr(&grid[(u32(run_cell) * f.grid.x + x) * f.grid.w + w], run_mask);
+    }
+    run_mask = 0u;
+}
+
+// Adds bin k's hit in cell y to the run of equal cells; a run becomes one atomic OR.
+fn mark(x: u32, w: u32, k: u32, y: i32) {
+    if (y != run_cell) {
+        flush(x, w);
+        run_cell = y;
+    }
+    run_mask |= 1u << (k - w * 32u);
+}
+
+// Bins whose sample z (k + 1/2 + offset) lies in [z0, z1] (either order), within word w:
+// (first, last), empty when first > last.
+fn bins_in(z0: f32, z1: f32, w: u32, offset: f32) -> vec2i {
+    let c0 = bin_coord(f, min(z0, z1)) - 0.5 - offset;
+    let c1 = bin_coord(f, max(z0, z1)) - 0.5 - offset;
+    let lo = max(ceil(c0), f32(w * 32u));
+    let hi = min(floor(c1), f32(w * 32u + 31u));
+    if (!(lo <= hi)) { return vec2i(1, 0); } // also NaN
+    return vec2i(i32(lo), i32(hi));
+}
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(workgroup_id) wg: vec3u,
+    @builtin(num_workgroups) groups: vec3u,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let item = (wg.y * groups.x + wg.x) * 64u + lid;
+    if (item >= counters[3]) { return; }
+    let found = find_item(item);
+    let rec = records[found.x];
+    let words = rec.w >> 16u;
+    let w = (rec.w & 0xffffu) + found.y % words;
+    var x = rec.y + found.y / words;
+    if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
     let e = f.eye.xyz;
-    let x0 = f32(ix);
-    let y0 = f32(iy);
-    var faces: array<vec3f, 4>;
+    let tri = rec.x;
+    let p = array<vec3f, 3>(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
+    run_cell = -1;
+    run_mask = 0u;
+    let offset = bin_offset(x);
+
     if (is_cartesian(f)) {
-        // Screen-space cells: planes through the eye and two adjacent corner rays.
-        let d00 = cell_dir(f, x0, y0);
-        let d10 = cell_dir(f, x0 + 1.0, y0);
-        let d11 = cell_dir(f, x0 + 1.0, y0 + 1.0);
-        let d01 = cell_dir(f, x0, y0 + 1.0);
-        let centre = cell_dir(f, x0 + 0.5, y0 + 0.5);
-        faces = array<vec3f, 4>(cross(d00, d10), cross(d10, d11), cross(d11, d01), cross(d01, d00));
-        for (var k = 0; k < 4; k++) {
-            if (dot(faces[k], centre) < 0.0) { faces[k] = -faces[k]; }
+        // The plane of grid row (or column) x: through the eye and two of its view directions;
+        // the light rays in it are lines of constant view depth.
+        let n = cross(cell_dir(f, f32(x) + 0.5, 0.0), cell_dir(f, f32(x) + 0.5, f32(f.grid.y)));
+        let s = plane_segment(p, n);
+        if (!s.ok) { return; }
+        let fw = f.cam_fwd.xyz;
+        let z0 = dot(s.p, fw);
+        let z1 = dot(s.q, fw);
+        let ks = bins_in(z0, z1, w, offset);
+        for (var k = ks.x; k <= ks.y; k++) {
+            var q = s.p;
+            if (z1 != z0) {
+                let t = clamp((z_of_bin(f, f32(k) + 0.5 + offset) - z0) / (z1 - z0), 0.0, 1.0);
+                q = s.p + (s.q - s.p) * t;
+            }
+            mark(x, w, u32(k), cartesian_cell(q));
         }
-    } else {
-        // Epipolar cells, faces in closed form (cross products of nearly parallel corner rays
-        // lose their sign near the axis, which dropped whole planes of row 0 at 1024 planes).
-        // With m, q the unit directions at phi_m and phi_m + 90 degrees around the axis a and
-        // delta the half-width in phi: the plane faces are -+(-sin phi b1 + cos phi b2), and the
-        // chord through the corner rays at gamma is normal to sin(gamma) cos(delta) a - cos(gamma) m.
-        let phi0 = phi_of_plane(f, x0);
-        let phi1 = phi_of_plane(f, x0 + 1.0);
-        let g0 = gamma_of_ray(f, y0);
-        let g1 = gamma_of_ray(f, y0 + 1.0);
-        let a = f.axis.xyz;
-        let b1 = f.b1.xyz;
-        let b2 = f.b2.xyz;
-        let pm = 0.5 * (phi0 + phi1);
-        let cd = cos(0.5 * (phi1 - phi0));
-        let m = b1 * cos(pm) + b2 * sin(pm);
-        faces[0] = cos(g0) * m - sin(g0) * cd * a;          // gamma > gamma_0
-        faces[1] = b1 * sin(phi1) - b2 * cos(phi1);         // phi < phi_1
-        faces[2] = sin(g1) * cd * a - cos(g1) * m;          // gamma < gamma_1
-        faces[3] = -b1 * sin(phi0) + b2 * cos(phi0);        // phi > phi_0
+        flush(x, w);
+        return;
     }
 
-    count = 3u;
-    poly[0] = tris[3u * i.tri].xyz - e;
-    poly[1] = tris[3u * i.tri + 1u].xyz - e;
-    poly[2] = tris[3u * i.tri + 2u].xyz - e;
-    // Ray 0 also holds the casters before the first visible ray (toward the light): its cell is
-    // open on that side.
-    for (var k = select(0, 1, iy == 0u); k < 4; k++) {
-        let n = faces[k];
-        clip_plane(n);
-        if (count < 3u) { return vec4f(0.0); }
+    // Epipolar: the plane through the axis at the plane's centre angle, in 2-D coordinates
+    // (u along the axis, v toward the half-plane side m), with the eye at the origin.
+    let phi = phi_of_plane(f, f32(x) + 0.5);
+    let cs = vec2f(cos(phi), sin(phi));
+    let a = f.axis.xyz;
+    let m = f.b1.xyz * cs.x + f.b2.xyz * cs.y;
+    let n = f.b2.xyz * cs.x - f.b1.xyz * cs.y;
+    let s = plane_segment(p, n);
+    if (!s.ok) { return; }
+    var sp = dot(s.p, m);
+    var sq = dot(s.q, m);
+    if (sp < 0.0 && sq < 0.0) { return; } // the other half of the plane
+    var up = dot(s.p, a);
+    var uq = dot(s.q, a);
+    // Clip to the half-plane v >= 0. A clipped end lies on the axis: v = 0 exactly, so its z is
+    // exactly 0 or pi (or r = 0), and the neighbours' ranges meet there.
+    if (sp < 0.0) {
+        up = up + (uq - up) * (sp / (sp - sq));
+        sp = 0.0;
     }
-
-    // z range of the clipped polygon.
-    var zr = vec2f(1e30, -1e30);
-    for (var k = 0u; k < count; k++) {
-        let p = poly[k] + e;
-        let q = poly[(k + 1u) % count] + e;
-        var r: vec2f;
-        if (is_cartesian(f)) {
-            let dp = dot(p - e, f.cam_fwd.xyz);
-            let dq = dot(q - e, f.cam_fwd.xyz);
-            r = vec2f(min(dp, dq), max(dp, dq));
-        } else if (is_point_light()) {
-            let l = f.light.xyz;
-            r = segment_angle_range(l, normalize(e - l), p, q);
-        } else {
-            r = segment_axis_distance_range(p, q);
+    if (sq < 0.0) {
+        uq = uq + (up - uq) * (sq / (sq - sp));
+        sq = 0.0;
+    }
+    // abs: a -0 would make atan2 below return -pi instead of pi.
+    let pa = vec2f(up, abs(sp));
+    let pb = vec2f(uq, abs(sq));
+    let dist = f.axis.w;
+    var z0 = pa.y;
+    var z1 = pb.y;
+    if (is_point_light()) {
+        z0 = atan2(pa.y, dist - pa.x);
+        z1 = atan2(pb.y, dist - pb.x);
+    }
+    let ks = bins_in(z0, z1, w, offset);
+    let dp = pb - pa;
+    // The end nearer the light along its light ray (smaller gamma): where a light ray runs along
+    // the segment, that is where it meets the triangle first.
+    var near_end = pa;
+    if (atan2(pb.y, pb.x) < atan2(pa.y, pa.x)) { near_end = pb; }
+    for (var k = ks.x; k <= ks.y; k++) {
+        let zk = z_of_bin(f, f32(k) + 0.5 + offset);
+        var q = near_end;
+        if (is_point_light()) {
+            // Light ray from (D, 0) in direction (-cos zk, sin zk) against pa + t dp.
+            let sc = vec2f(sin(zk), cos(zk));
+            let den = dp.x * sc.x + dp.y * sc.y;
+            if (abs(den) > 1e-30) {
+                let t = clamp(-((pa.x - dist) * sc.x + pa.y * sc.y) / den, 0.0, 1.0);
+                q = pa + dp * t;
+            }
+        } else if (z1 != z0) {
+            // Light ray v = zk.
+            q = pa + dp * clamp((zk - z0) / (z1 - z0), 0.0, 1.0);
         }
-        zr = vec2f(min(zr.x, r.x), max(zr.y, r.y));
+        mark(x, w, u32(k), ray_cell(atan2(q.y, q.x)));
     }
-    let bins = f32(f.grid.z);
-    let b0 = bin_coord(f, zr.x);
-    let b1 = bin_coord(f, zr.y);
-    if (b1 < 0.0 || b0 >= bins) { return vec4f(0.0); }
-    let k0 = u32(clamp(b0, 0.0, bins - 1.0));
-    let k1 = u32(clamp(b1, 0.0, bins - 1.0));
-    let base = (iy * f.grid.x + ix) * f.grid.w;
-    for (var w = k0 / 32u; w <= k1 / 32u; w++) {
-        let lo = max(k0, w * 32u) - w * 32u;
-        let hi = min(k1, w * 32u + 31u) - w * 32u;
-        let n = hi - lo + 1u;
-        var mask = 0xffffffffu;
-        if (n < 32u) { mask = ((1u << n) - 1u) << lo; }
-        atomicOr(&grid[base + w], mask);
-    }
-    return vec4f(0.0);
+    flush(x, w);
 }

@@ -1,7 +1,12 @@
-//! Cull: the triangles that can shadow a visible point, and their epipolar rectangles
-//! (`shaders/cull.wgsl`). A triangle outside the visible wedge of planes, past the last visible
-//! ray, or outside the bins' z range is dropped; the kept ones are listed for Voxelize's indirect
-//! draw, and Scan's indirect dispatch is empty when none is kept, so an empty frame costs nothing.
+//! Cull: the triangles that can shadow a visible point, and the balanced work list Voxelize runs
+//! (`shaders/cull.wgsl`).
+//!
+//! A triangle outside the visible wedge of planes, past the last visible ray, or outside the bins'
+//! z range is dropped. A kept one gets a record and `items = planes x words`, the light-space
+//! samples it may cover in units of one plane x one 32-bit word of bins; an exclusive prefix sum
+//! over the items (1024 per workgroup, then the blocks) lets Voxelize give every item its own
+//! thread through an indirect dispatch. Scan's indirect dispatch is empty when nothing is kept, so
+//! an empty frame costs nothing.
 
 use super::util::{storage_entry, uniform_entry};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -16,20 +21,59 @@ pub struct CullCounts {
     pub culled_depth: u32,
     /// Dropped: outside the visible wedge of planes or past the last visible ray.
     pub culled_view: u32,
+    /// Voxelize's work items (one triangle x one plane x one 32-bit word of bins).
+    pub items: u64,
+}
+
+/// The per-scene buffers the Cull pass fills for each chunk of triangles, sized for the largest.
+pub struct CullLists {
+    /// Per kept triangle: (triangle, first plane, planes, first word | words << 16).
+    pub records: wgpu::Buffer,
+    /// Per kept triangle: the exclusive prefix sum of the items within its block of 1024.
+    pub offsets: wgpu::Buffer,
+    /// Per block of 1024 kept triangles: the exclusive prefix sum of the blocks' items.
+    pub blocks: wgpu::Buffer,
+}
+
+impl CullLists {
+    pub fn new(device: &wgpu::Device, max_triangles: u32) -> CullLists {
+        let n = max_triangles.max(1) as u64;
+        let storage = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        CullLists {
+            records: storage("CullLists::records", n * 16),
+            offsets: storage("CullLists::offsets", n * 4),
+            blocks: storage("CullLists::blocks", n.div_ceil(Cull::BLOCK as u64) * 4),
+        }
+    }
+
+    /// Bytes per triangle of the lists (for the adapter's limits).
+    pub const BYTES_PER_TRIANGLE: u64 = 16;
 }
 
 pub struct Cull {
-    pipelines: SpecialisedCompute<2>,
+    pipelines: SpecialisedCompute<4>,
     pub layout: wgpu::BindGroupLayout,
-    /// `[kept, culled by depth, culled by view, unused]`.
+    /// `[kept (chunk), culled by depth, culled by view, items (chunk), kept (all), items (all),
+    /// overflowed lists, unused]`.
     pub counters: wgpu::Buffer,
-    /// DrawIndirect arguments for Voxelize.
-    pub draw_args: wgpu::Buffer,
-    /// DispatchIndirect arguments for Scan.
-    pub scan_args: wgpu::Buffer,
+    /// DispatchIndirect arguments: Voxelize at 12, Scan at 24.
+    pub dispatch: wgpu::Buffer,
 }
 
 impl Cull {
+    /// Kept triangles per prefix-sum workgroup.
+    pub const BLOCK: u32 = 1024;
+    /// Byte offsets of the indirect arguments in [`Cull::dispatch`].
+    pub const VOXELIZE_ARGS: u64 = 12;
+    pub const SCAN_ARGS: u64 = 24;
+
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Cull, GpuError> {
         let module = lib.module(device, "cull.wgsl")?;
         let c = wgpu::ShaderStages::COMPUTE;
@@ -37,12 +81,12 @@ impl Cull {
             label: Some("Cull::layout"),
             entries: &[
                 uniform_entry(0, c),
-                storage_entry(1, c, true),
-                storage_entry(2, c, false),
-                storage_entry(3, c, false),
-                storage_entry(4, c, false),
-                storage_entry(5, c, false),
-                storage_entry(6, c, false),
+                storage_entry(1, c, true),  // triangles (this chunk)
+                storage_entry(2, c, false), // records
+                storage_entry(3, c, false), // offsets
+                storage_entry(4, c, false), // blocks
+                storage_entry(5, c, false), // counters
+                storage_entry(6, c, false), // dispatch arguments
             ],
         });
         let buffer = |label: &str, size: u64, extra: wgpu::BufferUsages| {
@@ -62,13 +106,12 @@ impl Cull {
                 "Cull",
                 module,
                 &layout,
-                ["cull", "cull_finish"],
+                ["cull", "cull_finish", "offsets_local", "offsets_blocks"],
                 Specialised::Light,
             ),
             layout,
-            counters: buffer("Cull::counters", 16, wgpu::BufferUsages::empty()),
-            draw_args: buffer("Cull::draw_args", 16, wgpu::BufferUsages::INDIRECT),
-            scan_args: buffer("Cull::scan_args", 12, wgpu::BufferUsages::INDIRECT),
+            counters: buffer("Cull::counters", 32, wgpu::BufferUsages::empty()),
+            dispatch: buffer("Cull::dispatch", 48, wgpu::BufferUsages::INDIRECT),
         })
     }
 
@@ -77,6 +120,13 @@ impl Cull {
         self.pipelines.prepare(device, variant);
     }
 
+    /// Clears the frame's totals; call once per frame before the first chunk.
+    pub fn begin_frame(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.clear_buffer(&self.counters, 0, None);
+        encoder.clear_buffer(&self.dispatch, 0, None);
+    }
+
+    /// Culls one chunk of `triangles` triangles (bound in `bind_group`) and builds its work list.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -85,12 +135,12 @@ impl Cull {
         triangles: u32,
     ) {
         // Renderer::render_frame prepares every variant it records.
-        let Some([cull, finish]) = self.pipelines.get(variant) else {
+        let Some([cull, finish, local, blocks]) = self.pipelines.get(variant) else {
             return;
         };
-        for b in [&self.counters, &self.draw_args, &self.scan_args] {
-            encoder.clear_buffer(b, 0, None);
-        }
+        // This chunk's kept count and items (the frame's totals accumulate in the other counters).
+        encoder.clear_buffer(&self.counters, 0, Some(4));
+        encoder.clear_buffer(&self.counters, 12, Some(4));
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Cull::pass"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
@@ -100,6 +150,12 @@ impl Cull {
         let (gx, gy) = if groups > 65535 { (65535, groups.div_ceil(65535)) } else { (groups, 1) };
         pass.dispatch_workgroups(gx, gy, 1);
         pass.set_pipeline(finish);
+        pass.dispatch_workgroups(1, 1, 1);
+        // For every triangle of the chunk, kept or not (the dispatch buffer is bound here, so it
+        // cannot also be this dispatch's indirect arguments); blocks past the kept ones return early.
+        pass.set_pipeline(local);
+        pass.dispatch_workgroups(triangles.div_ceil(Self::BLOCK).max(1), 1, 1);
+        pass.set_pipeline(blocks);
         pass.dispatch_workgroups(1, 1, 1);
     }
 }

@@ -126,7 +126,6 @@ struct Targets {
 struct GridResources {
     grid: Grid,
     bits: wgpu::Buffer,
-    dummy: wgpu::TextureView,
 }
 
 /// Every pass, created together so that a reload either replaces all of them or none.
@@ -330,7 +329,7 @@ impl Renderer {
     pub fn cull_counts(&self) -> Result<CullCounts, GpuError> {
         let bytes = self.ctx.read_buffer(&self.passes.cull.counters)?;
         let v: &[u32] = bytemuck::cast_slice(&bytes);
-        Ok(CullCounts { kept: v[0], culled_depth: v[1], culled_view: v[2] })
+        Ok(CullCounts { kept: v[4], culled_depth: v[1], culled_view: v[2], items: v[5] as u64 })
     }
 
     /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
@@ -345,7 +344,9 @@ impl Renderer {
 
     /// Uploads the scene's geometry (call again when the geometry changes).
     pub fn set_scene(&mut self, scene: &Scene) {
-        self.geometry = Some((SceneGpu::new(&self.ctx.device, scene), scene.triangle_count()));
+        let l = self.ctx.device.limits();
+        let max_binding = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
+        self.geometry = Some((SceneGpu::new(&self.ctx.device, scene, max_binding), scene.triangle_count()));
     }
 
     fn ensure_targets(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
@@ -420,8 +421,7 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let dummy = Voxelize::dummy_target(d, grid.planes, grid.rays).create_view(&Default::default());
-        self.grid = Some(GridResources { grid, bits, dummy });
+        self.grid = Some(GridResources { grid, bits });
         Ok(())
     }
 
@@ -488,30 +488,43 @@ impl Renderer {
             ],
         );
         let cull = &self.passes.cull;
-        let cull_bg = bind(
-            "Cull::bind_group",
-            &cull.layout,
-            &[
-                frame.clone(),
-                geometry.triangles.as_entire_binding(),
-                geometry.kept.as_entire_binding(),
-                geometry.kept_rects.as_entire_binding(),
-                cull.counters.as_entire_binding(),
-                cull.draw_args.as_entire_binding(),
-                cull.scan_args.as_entire_binding(),
-            ],
-        );
-        let voxelize_bg = bind(
-            "Voxelize::bind_group",
-            &self.passes.voxelize.layout,
-            &[
-                frame.clone(),
-                geometry.triangles.as_entire_binding(),
-                g.bits.as_entire_binding(),
-                geometry.kept.as_entire_binding(),
-                geometry.kept_rects.as_entire_binding(),
-            ],
-        );
+        // One Cull and one Voxelize bind group per chunk of triangles (one chunk unless the mesh
+        // is larger than the adapter's largest storage binding).
+        let chunk_groups: Vec<(wgpu::BindGroup, wgpu::BindGroup, u32)> = geometry
+            .chunks
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .map(|(tris, n)| {
+                let l = &geometry.lists;
+                let cull_bg = bind(
+                    "Cull::bind_group",
+                    &cull.layout,
+                    &[
+                        frame.clone(),
+                        tris.as_entire_binding(),
+                        l.records.as_entire_binding(),
+                        l.offsets.as_entire_binding(),
+                        l.blocks.as_entire_binding(),
+                        cull.counters.as_entire_binding(),
+                        cull.dispatch.as_entire_binding(),
+                    ],
+                );
+                let voxelize_bg = bind(
+                    "Voxelize::bind_group",
+                    &self.passes.voxelize.layout,
+                    &[
+                        frame.clone(),
+                        tris.as_entire_binding(),
+                        g.bits.as_entire_binding(),
+                        l.records.as_entire_binding(),
+                        l.offsets.as_entire_binding(),
+                        l.blocks.as_entire_binding(),
+                        cull.counters.as_entire_binding(),
+                    ],
+                );
+                (cull_bg, voxelize_bg, *n)
+            })
+            .collect();
         let scan_bg = bind("Scan::bind_group", &self.passes.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
         let table_bg = bind(
             "ScatterTable::bind_group",
@@ -588,15 +601,19 @@ impl Renderer {
                 self.passes.ranges.record(&mut enc, variant, &ranges_bg, &self.frame_buffer, width, height);
                 mark(&mut enc, "ranges");
             }
-            self.passes.cull.record(&mut enc, variant, &cull_bg, geometry.triangle_count);
-            mark(&mut enc, "cull");
             enc.clear_buffer(&g.bits, 0, None);
-            self.passes.voxelize.record(&mut enc, variant, &voxelize_bg, &g.dummy, &self.passes.cull.draw_args);
-            mark(&mut enc, "voxelize");
+            self.passes.cull.begin_frame(&mut enc);
+            // Chunks are culled and voxelized in turn: they share the Cull pass's lists.
+            for (cull_bg, voxelize_bg, n) in &chunk_groups {
+                self.passes.cull.record(&mut enc, variant, cull_bg, *n);
+                mark(&mut enc, "cull");
+                self.passes.voxelize.record(&mut enc, variant, voxelize_bg, &self.passes.cull.dispatch);
+                mark(&mut enc, "voxelize");
+            }
             if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                 enc.copy_buffer_to_buffer(&g.bits, 0, copy, 0, g.bits.size());
             }
-            self.passes.scan.record(&mut enc, &scan_bg, &self.passes.cull.scan_args);
+            self.passes.scan.record(&mut enc, &scan_bg, &self.passes.cull.dispatch, Cull::SCAN_ARGS);
             mark(&mut enc, "scan");
             if scene.light.is_point() && method == Method::Vsv {
                 self.passes.scatter_table.record(&mut enc, variant, &table_bg);

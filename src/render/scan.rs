@@ -24,11 +24,18 @@ impl Scan {
     }
 
     /// `args`: the Cull pass's DispatchIndirect arguments (no workgroups when nothing was kept).
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, args: &wgpu::Buffer) {
+    /// `args` holds the indirect dispatch at byte `offset` (empty when no caster was kept).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
+        pass.dispatch_workgroups_indirect(args, offset);
     }
 }

@@ -1,5 +1,6 @@
 //! The scene's geometry on the GPU, uploaded once per scene.
 
+use super::cull::CullLists;
 use crate::scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -9,16 +10,21 @@ pub struct SceneGpu {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub index_count: u32,
-    /// Three `vec4<f32>` world vertices per triangle, for vertex pulling in the voxelizer.
-    pub triangles: wgpu::Buffer,
+    /// Three `vec4<f32>` world vertices per triangle, for Cull and Voxelize, in chunks that each
+    /// fit the adapter's largest storage binding (one chunk unless the mesh is huge), with the
+    /// number of triangles in each.
+    pub chunks: Vec<(wgpu::Buffer, u32)>,
     pub triangle_count: u32,
-    /// The Cull pass's output: kept triangle indices and two rectangles each.
-    pub kept: wgpu::Buffer,
-    pub kept_rects: wgpu::Buffer,
+    /// The Cull pass's lists, sized for the largest chunk.
+    pub lists: CullLists,
 }
 
 impl SceneGpu {
-    pub fn new(device: &wgpu::Device, scene: &Scene) -> SceneGpu {
+    /// Bytes per triangle in a chunk.
+    pub const TRIANGLE_BYTES: u64 = 48;
+
+    /// Uploads `scene`; `max_binding` is the largest storage binding the adapter allows (bytes).
+    pub fn new(device: &wgpu::Device, scene: &Scene, max_binding: u64) -> SceneGpu {
         let mut vertices: Vec<[f32; 6]> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(scene.triangle_count() * 3);
@@ -33,9 +39,10 @@ impl SceneGpu {
                 }
             }
         }
+        let triangle_count = (tris.len() / 3) as u32;
         if tris.is_empty() {
             // Keep every binding valid; a scene without triangles draws nothing.
-            tris.push([0.0; 4]);
+            tris.extend([[0.0; 4]; 3]);
             vertices.push([0.0; 6]);
         }
         let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -52,28 +59,27 @@ impl SceneGpu {
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let tb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("SceneGpu::triangles"),
-            contents: bytemuck::cast_slice(&tris),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let n = (index_count as u64 / 3).max(1);
-        let storage = |label: &str, size: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
+        let per_chunk = (max_binding / Self::TRIANGLE_BYTES).clamp(1, u32::MAX as u64) as usize;
+        let chunks: Vec<(wgpu::Buffer, u32)> = tris
+            .chunks(per_chunk * 3)
+            .enumerate()
+            .map(|(i, c)| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&format!("SceneGpu::triangles[{i}]")),
+                    contents: bytemuck::cast_slice(c),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
+                (buffer, (c.len() / 3) as u32 * u32::from(triangle_count > 0))
             })
-        };
+            .collect();
+        let largest = chunks.iter().map(|(_, n)| *n).max().unwrap_or(1);
         SceneGpu {
             vertices: vb,
             indices: ib,
             index_count,
-            triangles: tb,
-            triangle_count: index_count / 3,
-            kept: storage("SceneGpu::kept", n * 4),
-            kept_rects: storage("SceneGpu::kept_rects", n * 32),
+            chunks,
+            triangle_count,
+            lists: CullLists::new(device, largest),
         }
     }
 }

@@ -18,7 +18,8 @@ pub struct Surface {
 
 impl Surface {
     pub const RADIANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-    /// Eye distance (negative for the sky) and whether the surface faces the light on the eye's side.
+    /// Eye distance (negative for the sky) and, for a surface lit from behind, the cosine between the
+    /// view ray and its normal (0 when lit from the front).
     pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
     pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 

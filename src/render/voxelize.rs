@@ -1,121 +1,67 @@
-//! Voxelize: the geometry bits of the epipolar grid (`shaders/voxelize.wgsl`).
+//! Voxelize: the geometry bits of the epipolar grid by point-sampled light rays
+//! (`shaders/voxelize.wgsl`).
 //!
-//! Each triangle the Cull pass kept is drawn as its bounding rectangles in (plane, ray) texels (an
-//! indirect draw); each fragment clips the
-//! triangle to its texel's cell (the pyramid of four view rays from the eye) and sets the bits of
-//! the z bins the clipped polygon spans: `grid[x, y, k] |= 1` for `k` in `[bin(z_min), bin(z_max)]`.
-//! A render pass needs one attachment on Mesa 22, so a write-masked R8 target of the grid's size
-//! stands in.
+//! Plane `x` and bin `k` are sample positions: the light ray at the plane's centre angle and the
+//! bin's centre `z`. A triangle sets `geometry[x, y, k]` where that light ray meets it at an angle
+//! `gamma` inside ray cell `y`. One compute thread per item of the Cull pass's work list (one
+//! triangle x one plane x one 32-bit word of bins), dispatched indirectly, so the work follows the
+//! light-space samples each triangle covers and a large triangle is spread over many threads.
+//! Crossings of shared edges are computed in a canonical vertex order, which makes the sampling
+//! watertight: no light ray slips between two triangles that share an edge or a vertex.
 
-use super::util::{storage_entry, texture_2d, uniform_entry};
-use super::variant::{Specialised, Variant, VariantPipelines};
+use super::util::{storage_entry, uniform_entry};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 pub struct Voxelize {
-    module: wgpu::ShaderModule,
-    pipeline_layout: wgpu::PipelineLayout,
-    pipelines: VariantPipelines<wgpu::RenderPipeline>,
+    pipelines: SpecialisedCompute<1>,
     pub layout: wgpu::BindGroupLayout,
 }
 
 impl Voxelize {
-    const DUMMY: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
-    /// Vertices drawn per triangle: two rectangles (the second past the seam at phi = 0).
-    pub const VERTICES_PER_TRIANGLE: u32 = 12;
-
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Voxelize, GpuError> {
         let module = lib.module(device, "voxelize.wgsl")?;
+        let c = wgpu::ShaderStages::COMPUTE;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Voxelize::layout"),
             entries: &[
-                uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
-                storage_entry(1, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-                storage_entry(2, wgpu::ShaderStages::FRAGMENT, false),
-                storage_entry(3, wgpu::ShaderStages::VERTEX, true),
-                storage_entry(4, wgpu::ShaderStages::VERTEX, true),
+                uniform_entry(0, c),
+                storage_entry(1, c, true),  // triangles (this chunk)
+                storage_entry(2, c, false), // grid bits
+                storage_entry(3, c, true),  // Cull: records
+                storage_entry(4, c, true),  // Cull: offsets
+                storage_entry(5, c, true),  // Cull: block offsets
+                storage_entry(6, c, true),  // Cull: counters
             ],
         });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("Voxelize::pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        Ok(Voxelize { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout })
+        Ok(Voxelize {
+            pipelines: SpecialisedCompute::new(device, "Voxelize", module, &layout, ["main"], Specialised::Light),
+            layout,
+        })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
-        let (module, pl) = (&self.module, &self.pipeline_layout);
-        self.pipelines.prepare(variant, |constants, v| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(&format!("Voxelize::pipeline{v}")),
-                layout: Some(pl),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: super::util::options(constants),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: super::util::options(constants),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: Self::DUMMY,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::empty(),
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
+        self.pipelines.prepare(device, variant);
     }
 
-    /// The stand-in attachment, `planes x rays`.
-    pub fn dummy_target(device: &wgpu::Device, planes: u32, rays: u32) -> wgpu::Texture {
-        texture_2d(
-            device,
-            "Voxelize::dummy_target",
-            planes,
-            rays,
-            1,
-            Self::DUMMY,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        )
-    }
-
+    /// One thread per work item; `dispatch` holds the Cull pass's indirect arguments (Voxelize's
+    /// at [`super::Cull::VOXELIZE_ARGS`]).
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
         bind_group: &wgpu::BindGroup,
-        dummy: &wgpu::TextureView,
-        draw_args: &wgpu::Buffer,
+        dispatch: &wgpu::Buffer,
     ) {
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
+        let Some([pipeline]) = self.pipelines.get(variant) else {
             return;
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("Voxelize::pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: dummy,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Voxelize::pass"), timestamp_writes: None });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
-        // The Cull pass wrote the vertex count: 12 per kept triangle.
-        pass.draw_indirect(draw_args, 0);
+        pass.dispatch_workgroups_indirect(dispatch, super::Cull::VOXELIZE_ARGS);
     }
 }
