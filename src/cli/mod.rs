@@ -347,7 +347,7 @@ fn build_scene(args: &RenderArgs) -> Result<Built> {
                 intensity / (dist * dist)
             }
         };
-        let direction = unit_direction("--light-dir", d)?;
+        let direction = unit_direction("--light-dir direction", d)?;
         scene.light = Light::Directional { direction, irradiance };
     }
     let source = args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "built-in scene".into());
