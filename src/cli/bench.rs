@@ -16,18 +16,22 @@ pub struct BenchArgs {
     /// Folder for results.csv, report.md and the plots (created when missing).
     #[arg(long, short)]
     pub out: PathBuf,
-    /// Image size as WIDTHxHEIGHT [default: 1024x1024, 64x64 with --quick].
-    #[arg(long, value_parser = super::parse_size, help = format!("{} [default: 1024x1024, 64x64 with --quick]", super::size_help()))]
+    #[arg(long, value_parser = super::parse_size,
+          help = format!("{} [default: 1024x1024, 64x64 with --quick]", super::size_help()))]
     pub size: Option<(u32, u32)>,
     /// Tiny sweeps (two or three points per method, small scaling sweeps): for CI and smoke tests.
     #[arg(long)]
     pub quick: bool,
     #[arg(long, value_parser = |s: &str| super::parse_count::<u32>(&Measure::FRAMES, s),
-          help = super::spec_help("Frames measured per point; the report gives their median [default: 5, 3 with --quick]", &Measure::FRAMES))]
+          help = super::spec_help(
+              "Frames measured per point; the report gives their median [default: 5, 3 with --quick]",
+              &Measure::FRAMES,
+          ))]
     pub frames: Option<u32>,
-    #[arg(long, default_value_t = 1, value_parser = |s: &str| super::parse_count::<u32>(&Measure::WARMUP, s),
-          help = super::spec_help("Frames rendered before measuring (pipeline compilation, caches)", &Measure::WARMUP))]
-    pub warmup: u32,
+    #[arg(long, value_parser = |s: &str| super::parse_count::<u32>(&Measure::WARMUP, s),
+          help = super::spec_help("Frames rendered before measuring (pipeline compilation, caches) [default: 1]",
+                                  &Measure::WARMUP))]
+    pub warmup: Option<u32>,
     /// Where reference images are cached [default: OUT/cache].
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
@@ -58,7 +62,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     if let Some(f) = args.frames {
         opts.frames = f as usize;
     }
-    opts.warmup = args.warmup as usize;
+    if let Some(w) = args.warmup {
+        opts.warmup = w as usize;
+    }
     if let Some(c) = &args.cache_dir {
         opts.cache_dir = c.clone();
     }

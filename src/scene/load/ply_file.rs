@@ -169,7 +169,8 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
                     if f.idx.len() < 3 {
                         // Typically a vertex line read as a face: the header's counts are wrong.
                         return Err(bad(&format!(
-                            "face {i} has {} vertices (a face needs at least 3; does the header's vertex count match the data?)",
+                            "face {i} has {} vertices (a face needs at least 3; does the header's vertex \
+                             count match the data?)",
                             f.idx.len()
                         )));
                     }
