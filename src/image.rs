@@ -11,14 +11,15 @@
 //! * [`Image::write_png`]: 8-bit sRGB for viewing, after exposure and tone mapping, see
 //!   [`Image::to_srgb8`].
 //!
-//! Every write is atomic: the data goes to a temporary file in the destination's directory,
-//! is flushed to disk and then renamed over the destination, so an interrupted run never
-//! leaves a half-written file behind. Every error names the file it is about.
+//! Every write is atomic ([`crate::fsx`]): the data goes to a temporary file in the destination's
+//! directory, is flushed to disk and then renamed over the destination, so an interrupted run
+//! never leaves a half-written file behind. `stage_*` stop before the rename, so that a command
+//! with several outputs commits them only when all were written. Every error names the file.
 
-use std::fs::{self, File};
-use std::io::{self, BufWriter, Write};
+use crate::fsx::Staged;
+use std::fs::File;
+use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What went wrong reading or writing an image, or building one from raw data.
 ///
@@ -148,6 +149,13 @@ impl Image {
 
     /// Writes the image as a float32 RGB OpenEXR file (ZIP compression, lossless), atomically.
     pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<(), ImageError> {
+        let path = path.as_ref();
+        self.stage_exr(path)?.commit().map_err(|source| ImageError::Io { op: "write", path: path.into(), source })
+    }
+
+    /// [`Image::write_exr`] up to the rename: the complete file waits beside `path` until
+    /// [`Staged::commit`], so that a command writes all of its outputs or none.
+    pub fn stage_exr(&self, path: impl AsRef<Path>) -> Result<Staged, ImageError> {
         use exr::prelude::*;
         let path = path.as_ref();
         self.check_size(path)?;
@@ -157,7 +165,7 @@ impl Image {
             (p[0], p[1], p[2])
         });
         let image = exr::image::Image::from_encoded_channels((w, h), Encoding::SMALL_LOSSLESS, channels);
-        write_atomic(path, |file| image.write().to_buffered(file).map_err(|e| exr_error("write", path, e)))
+        stage(path, |file| image.write().to_buffered(file).map_err(|e| exr_error("write", path, e)))
     }
 
     /// Reads the first RGB(A) layer of an OpenEXR file at its largest resolution level.
@@ -223,11 +231,21 @@ impl Image {
 
     /// Writes the image as an 8-bit sRGB RGBA PNG (see [`Image::to_srgb8`]), atomically.
     pub fn write_png(&self, path: impl AsRef<Path>, exposure_stops: f32) -> Result<(), ImageError> {
+        let path = path.as_ref();
+        self.stage_png(path, exposure_stops)?.commit().map_err(|source| ImageError::Io {
+            op: "write",
+            path: path.into(),
+            source,
+        })
+    }
+
+    /// [`Image::write_png`] up to the rename (see [`Image::stage_exr`]).
+    pub fn stage_png(&self, path: impl AsRef<Path>, exposure_stops: f32) -> Result<Staged, ImageError> {
         use image::ImageEncoder;
         let path = path.as_ref();
         self.check_size(path)?;
         let rgba = self.to_srgb8(exposure_stops);
-        write_atomic(path, |file| {
+        stage(path, |file| {
             image::codecs::png::PngEncoder::new(file)
                 .write_image(&rgba, self.width, self.height, image::ExtendedColorType::Rgba8)
                 .map_err(|e| match e {
@@ -286,33 +304,18 @@ pub fn encode_srgb8(linear: f32) -> u8 {
     (e * 255.0 + 0.5).clamp(0.0, 255.0) as u8
 }
 
-/// Writes `path` atomically: `write` fills a temporary file in the same directory, which is
-/// flushed, synced and renamed over `path`. On any failure the temporary file is removed and
-/// `path` is left as it was. Errors name `path`, never the temporary name.
-fn write_atomic(
+/// Stages `path` through [`Staged::write`] with an encoder that fails with an [`ImageError`]; every
+/// error names `path`, never the temporary file.
+fn stage(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), ImageError>,
-) -> Result<(), ImageError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let io_err = |source: io::Error| ImageError::Io { op: "write", path: path.into(), source };
-
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| io_err(io::Error::new(io::ErrorKind::InvalidInput, "the path does not name a file")))?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(format!(".{}.{}.tmp", std::process::id(), COUNTER.fetch_add(1, Ordering::Relaxed)));
-    let tmp = path.with_file_name(tmp_name);
-
-    let file = fs::OpenOptions::new().write(true).create_new(true).open(&tmp).map_err(io_err)?;
-    let mut writer = BufWriter::new(file);
-    let result = write(&mut writer)
-        .and_then(|()| writer.flush().map_err(io_err))
-        .and_then(|()| writer.get_ref().sync_all().map_err(io_err));
-    drop(writer);
-    let result = result.and_then(|()| fs::rename(&tmp, path).map_err(io_err));
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+) -> Result<Staged, ImageError> {
+    let mut encoder_error = None;
+    let staged = Staged::write(path, |w| {
+        write(w).map_err(|e| {
+            encoder_error = Some(e);
+            io::Error::other("encoding failed")
+        })
+    });
+    staged.map_err(|source| encoder_error.unwrap_or(ImageError::Io { op: "write", path: path.into(), source }))
 }

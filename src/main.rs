@@ -7,7 +7,19 @@ use clap::Parser;
 use cli::{Cli, Command};
 
 fn main() {
-    let cli = Cli::parse();
+    // Before anything can warn: every command's warnings reach stderr.
+    cli::init_logging();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            if e.use_stderr() {
+                // Values the user typed are echoed: escape control characters in them.
+                eprint!("{}", cli::escape_controls(&e.render().to_string()));
+                std::process::exit(e.exit_code());
+            }
+            e.exit(); // --help, --version
+        }
+    };
     let result = match cli.command {
         Some(Command::Render(args)) => cli::render(args),
         Some(Command::Compare { a, b, json }) => cli::compare(&a, &b, json),
@@ -17,7 +29,7 @@ fn main() {
         None => cli::edit(cli::EditArgs::default()),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", cli::error_message(&e));
         std::process::exit(1);
     }
 }

@@ -39,13 +39,15 @@ pub enum ParamError {
 
 impl Spec {
     /// Checks one value against the range. The bounds are met to f32 precision: parameters are
-    /// stored as f32, and `0.999f32` (0.99900001) must pass a documented maximum of 0.999.
+    /// stored as f32, and `0.999f32` (0.99900001) must pass a documented maximum of 0.999. The slack
+    /// is relative to each bound itself, so a minimum of 0 admits no negative value however large
+    /// the maximum is.
     pub fn check(&self, value: f64) -> Result<(), ParamError> {
         if !value.is_finite() {
             return Err(ParamError::NotFinite { name: self.name, value });
         }
-        let slack = f32::EPSILON as f64 * self.min.abs().max(self.max.abs()).max(1.0);
-        if value < self.min - slack || value > self.max + slack {
+        let slack = |bound: f64| f32::EPSILON as f64 * bound.abs();
+        if value < self.min - slack(self.min) || value > self.max + slack(self.max) {
             return Err(ParamError::OutOfRange {
                 name: self.name,
                 value,
@@ -519,6 +521,183 @@ impl Default for Exposure {
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Surfaces, camera, image and measurement settings
+// ---------------------------------------------------------------------------------------------
+
+/// Ranges of a mesh's surface values (the meshes themselves live in `crate::scene`).
+pub struct Surface;
+
+impl Surface {
+    pub const ALBEDO: Spec = Spec {
+        name: "albedo",
+        unit: "",
+        min: 0.0,
+        max: 1.0,
+        doc: "Diffuse reflectance of a surface per channel: the fraction of light it reflects.",
+    };
+}
+
+/// Ranges of the camera's scalar settings (the camera itself is `crate::scene::Camera`).
+pub struct View;
+
+impl View {
+    pub const FOV_Y: Spec = Spec {
+        name: "fov_y_deg",
+        unit: "deg",
+        min: 0.01,
+        max: 178.0,
+        doc: "Vertical field of view of the pinhole camera.",
+    };
+}
+
+/// The size of a rendered image (`--size WIDTHxHEIGHT`).
+pub struct ImageSize;
+
+impl ImageSize {
+    pub const SIDE: Spec =
+        Spec { name: "size", unit: "pixels", min: 1.0, max: 16384.0, doc: "Width or height of a rendered image." };
+}
+
+/// Settings of the exact CPU reference a user may choose (`--samples`); its defaults are
+/// `reference::ReferenceOptions::default()`.
+pub struct ReferenceQuality;
+
+impl ReferenceQuality {
+    /// Below 2 the reference has no interval to bisect; beyond 65536 its per-thread buffers stop
+    /// being small and the result no longer changes at any image size this tool renders.
+    pub const SAMPLES: Spec = Spec {
+        name: "samples",
+        unit: "per view ray",
+        min: 2.0,
+        max: 65536.0,
+        doc: "Visibility samples per view ray of the CPU reference: a shadow feature thinner than \
+              1/(samples - 1) of the ray's light angle can be missed.",
+    };
+}
+
+/// How `epivox bench` measures (`--frames`, `--warmup`).
+pub struct Measure;
+
+impl Measure {
+    pub const FRAMES: Spec = Spec {
+        name: "frames",
+        unit: "frames",
+        min: 1.0,
+        max: 1000.0,
+        doc: "Frames timed per measured point; the report gives their median.",
+    };
+    pub const WARMUP: Spec = Spec {
+        name: "warmup",
+        unit: "frames",
+        min: 0.0,
+        max: 1000.0,
+        doc: "Frames rendered before timing (pipeline compilation, caches).",
+    };
+}
+
+impl Light {
+    /// Radiance of an emissive surface that becomes a point light (Mitsuba's area emitters).
+    pub const RADIANCE: Spec = Spec {
+        name: "radiance",
+        unit: "W/(m^2 sr)",
+        min: 0.0,
+        max: 1.0e9,
+        doc: "Radiance of an emissive surface per channel.",
+    };
+}
+
+/// A direction given by a user or a file, unit length. Zero, NaN and infinite vectors are refused
+/// (never replaced by a default): `name` says which field it was.
+pub fn unit_direction(name: &str, v: Vec3) -> Result<Vec3, ParamError> {
+    match v.try_normalize() {
+        Some(u) if v.is_finite() => Ok(u),
+        _ => Err(ParamError::Invalid(format!("{name} = {v} must be a finite, non-zero vector"))),
+    }
+}
+
+/// Strict deserializers for the files users write (presets, scene files): a vector is exactly
+/// three numbers, and a phase function is one of [`Phase::KINDS`] with `g` exactly when the kind
+/// has one and no other key.
+pub mod de {
+    use super::Phase;
+    use glam::Vec3;
+    use serde::de::{Error, SeqAccess, Visitor};
+    use serde::{Deserialize, Deserializer};
+
+    struct Vec3Visitor;
+
+    impl<'de> Visitor<'de> for Vec3Visitor {
+        type Value = Vec3;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an array of 3 numbers")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec3, A::Error> {
+            let mut v = [0.0f32; 3];
+            let mut n = 0usize;
+            while let Some(x) = seq.next_element::<f32>()? {
+                if let Some(slot) = v.get_mut(n) {
+                    *slot = x;
+                }
+                n += 1;
+            }
+            if n != 3 {
+                return Err(A::Error::invalid_length(n, &self));
+            }
+            Ok(Vec3::from(v))
+        }
+    }
+
+    /// Exactly three numbers.
+    pub fn vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+        d.deserialize_seq(Vec3Visitor)
+    }
+
+    /// [`vec3`] for an optional field (use with `#[serde(default)]`).
+    pub fn opt_vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec3>, D::Error> {
+        vec3(d).map(Some)
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct PhaseFields {
+        #[serde(rename = "type")]
+        kind: String,
+        g: Option<f32>,
+    }
+
+    /// `{ type = KIND, g = G }`: see [`Phase::from_fields`].
+    pub fn phase<'de, D: Deserializer<'de>>(d: D) -> Result<Phase, D::Error> {
+        let f = PhaseFields::deserialize(d)?;
+        Phase::from_fields(&f.kind, f.g).map_err(D::Error::custom)
+    }
+
+    /// [`phase`] for an optional field (use with `#[serde(default)]`).
+    pub fn opt_phase<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Phase>, D::Error> {
+        phase(d).map(Some)
+    }
+}
+
+impl Phase {
+    /// The phase function a file names: `kind` one of [`Phase::KINDS`], `g` given exactly when the
+    /// kind has one ([`Phase::has_g`]). The range of `g` is checked by [`Phase::validate`].
+    pub fn from_fields(kind: &str, g: Option<f32>) -> Result<Phase, ParamError> {
+        let Some(id) = Self::KINDS.iter().position(|k| *k == kind) else {
+            return Err(ParamError::Invalid(format!(
+                "unknown phase function type '{kind}' (expected one of: {})",
+                Self::KINDS.join(", ")
+            )));
+        };
+        let p = Self::of_kind(id as u32, g.unwrap_or(0.0))
+            .ok_or_else(|| ParamError::Invalid(format!("unknown phase function type '{kind}'")))?;
+        match (p.has_g(), g) {
+            (true, None) => Err(ParamError::Invalid(format!("phase function '{kind}' needs `g`"))),
+            (false, Some(_)) => Err(ParamError::Invalid(format!("phase function '{kind}' has no `g`"))),
+            _ => Ok(p),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -579,6 +758,43 @@ mod tests {
     }
 
     #[test]
+    fn phase_from_fields_is_strict() {
+        assert_eq!(Phase::from_fields("schlick", Some(0.5)).unwrap(), Phase::Schlick { g: 0.5 });
+        assert_eq!(Phase::from_fields("rayleigh", None).unwrap(), Phase::Rayleigh);
+        for (kind, g, needle) in [
+            ("rayleigh", Some(0.1), "has no `g`"),
+            ("henyey-greenstein", None, "needs `g`"),
+            ("Isotropic", None, "unknown phase function type 'Isotropic'"),
+        ] {
+            let e = Phase::from_fields(kind, g).unwrap_err().to_string();
+            assert!(e.contains(needle), "{kind}: {e}");
+        }
+        // The strict deserializers, through TOML as the files use them.
+        #[derive(Deserialize)]
+        struct T {
+            #[serde(deserialize_with = "de::vec3")]
+            v: Vec3,
+            #[serde(default, deserialize_with = "de::opt_phase")]
+            p: Option<Phase>,
+        }
+        let t: T = toml::from_str("v = [1, 2.5, 3]\np = { type = \"cornette-shanks\", g = -0.2 }").unwrap();
+        assert_eq!((t.v, t.p), (Vec3::new(1.0, 2.5, 3.0), Some(Phase::CornetteShanks { g: -0.2 })));
+        assert!(toml::from_str::<T>("v = [1, 2, 3, 4]").is_err());
+        assert!(toml::from_str::<T>("v = [1, 2]").is_err());
+        assert!(toml::from_str::<T>("v = [1, 2, 3]\np = { type = \"isotropic\", g = 0.0 }").is_err());
+        assert!(toml::from_str::<T>("v = [1, 2, 3]\np = { type = \"isotropic\", k = 1 }").is_err());
+    }
+
+    #[test]
+    fn unit_direction_refuses_instead_of_substituting() {
+        assert_eq!(unit_direction("d", Vec3::new(0.0, 2.0, 0.0)).unwrap(), Vec3::Y);
+        for v in [Vec3::ZERO, Vec3::new(f32::NAN, 1.0, 0.0), Vec3::new(f32::INFINITY, 0.0, 0.0)] {
+            let e = unit_direction("light direction", v).unwrap_err().to_string();
+            assert!(e.contains("light direction") && e.contains("non-zero"), "{e}");
+        }
+    }
+
+    #[test]
     fn grid_parse_and_validate() {
         let g = Grid::parse("512x256x64").unwrap();
         assert_eq!((g.planes, g.rays, g.bins), (512, 256, 64));
@@ -590,6 +806,11 @@ mod tests {
 
     #[test]
     fn ranges_reject_bad_values() {
+        // A wide range does not widen its lower bound: [0, 1e9] refuses -5 (it once had a slack of
+        // 119 at both ends).
+        assert!(Light::INTENSITY.check(-5.0).is_err());
+        assert!(Light::INTENSITY.check(-1e-6).is_err());
+        assert!(Light::INTENSITY.check(0.0).is_ok() && Light::INTENSITY.check(f64::from(1e9_f32)).is_ok());
         assert!(Medium::SCATTERING.check(-1.0).is_err());
         assert!(Medium::SCATTERING.check(f64::NAN).is_err());
         assert!(Medium::default().validate().is_ok());

@@ -12,10 +12,10 @@
 //! Only the fields a look needs are written; the rest keep the scene's values. Unknown fields,
 //! other format versions and out-of-range values are refused with a message naming the field.
 //!
-//! [`Preset::from_scene`] captures a look and [`Preset::save`] writes it atomically (a temporary
-//! file in the same folder, then a rename), so a crash never leaves half a preset behind.
+//! [`Preset::from_scene`] captures a look and [`Preset::save`] writes it atomically
+//! ([`crate::fsx`]), so a crash never leaves half a preset behind.
 
-use crate::params::{Grid, Medium, ParamError, Phase};
+use crate::params::{de, Grid, Medium, ParamError, Phase};
 use crate::scene::Scene;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -42,13 +42,15 @@ pub enum PresetError {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MediumPatch {
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Exactly three numbers (so is `absorption`).
+    #[serde(default, deserialize_with = "de::opt_vec3", skip_serializing_if = "Option::is_none")]
     pub scattering: Option<Vec3>,
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, deserialize_with = "de::opt_vec3", skip_serializing_if = "Option::is_none")]
     pub absorption: Option<Vec3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub density: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// A known type with `g` exactly where the type has one, and no other key.
+    #[serde(default, deserialize_with = "de::opt_phase", skip_serializing_if = "Option::is_none")]
     pub phase: Option<Phase>,
 }
 
@@ -185,12 +187,11 @@ impl Preset {
                 out += &format!("density = {}\n", num(v));
             }
             if let Some(p) = m.phase {
-                let kind = Phase::KINDS[p.id() as usize];
-                out += &match p {
-                    Phase::HenyeyGreenstein { g } | Phase::Schlick { g } | Phase::CornetteShanks { g } => {
-                        format!("phase = {{ type = {}, g = {} }}\n", string(kind), num(g))
-                    }
-                    Phase::Isotropic | Phase::Rayleigh => format!("phase = {{ type = {} }}\n", string(kind)),
+                let kind = string(p.kind_name());
+                out += &if p.has_g() {
+                    format!("phase = {{ type = {kind}, g = {} }}\n", num(p.g()))
+                } else {
+                    format!("phase = {{ type = {kind} }}\n")
                 };
             }
         }
@@ -210,37 +211,15 @@ impl Preset {
         out
     }
 
-    /// Writes the preset to `path` atomically: the text goes to a temporary file in the same folder,
-    /// is flushed to disk, and is then renamed over `path`. An existing `path` is replaced — callers
-    /// that must not overwrite (Save As) check first and ask. The text is parsed back before the
-    /// rename, so a preset that this build could not read again is never written.
+    /// Writes the preset to `path` atomically (`fsx::write_atomic`: a temporary file beside it,
+    /// flushed, then renamed over it). An existing `path` is replaced — callers that must not
+    /// overwrite (Save As) check first and ask. The text is parsed back before anything is written,
+    /// so a preset that this build could not read again is never written.
     pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        use std::io::Write;
         let text = self.to_toml();
         Self::parse(&text, path)?;
-        let write_err = |source| PresetError::Write { path: path.into(), source };
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let file_name = path.file_name().ok_or_else(|| {
-            write_err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "the path names no file"))
-        })?;
-        static COUNTER: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let tmp = dir.join(format!(".{}.{}-{n}.tmp", file_name.to_string_lossy(), std::process::id()));
-        let result = (|| {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(text.as_bytes())?;
-            f.sync_all()?;
-            drop(f);
-            std::fs::rename(&tmp, path)
-        })();
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(write_err(e));
-        }
-        Ok(())
+        crate::fsx::write_bytes_atomic(path, text.as_bytes())
+            .map_err(|source| PresetError::Write { path: path.into(), source })
     }
 }
 

@@ -130,7 +130,8 @@ fn japanese_classroom_mitsuba() {
     let s = load_timed(&p);
     assert!(t.elapsed().as_secs_f64() < 10.0, "loading took {:?}", t.elapsed());
     assert_eq!(s.name, "japanese_classroom");
-    assert_eq!(s.triangle_count(), 103_832);
+    // 103 832 in the files, of which 2 have zero area and are dropped at load.
+    assert_eq!(s.triangle_count(), 103_830);
     assert_eq!(s.meshes.len(), 79);
     // Sun: directional, toward the sun, default irradiance.
     let Light::Directional { direction, irradiance } = s.light else { panic!("{:?}", s.light) };

@@ -10,10 +10,11 @@ const PASS_ORDER: [&str; 9] =
     ["shadow_map", "surface", "ranges", "voxelize", "scan", "scatter_table", "integrate", "raymarch", "composite"];
 
 fn write(path: &Path, text: &str) -> Result<(), BenchError> {
-    // Atomic: a temporary file beside the destination, renamed over it.
-    let tmp = path.with_extension("tmp~");
-    std::fs::write(&tmp, text).map_err(|source| BenchError::Io { op: "write", path: tmp.clone(), source })?;
-    std::fs::rename(&tmp, path).map_err(|source| BenchError::Io { op: "write", path: path.to_path_buf(), source })
+    crate::fsx::write_bytes_atomic(path, text.as_bytes()).map_err(|source| BenchError::Io {
+        op: "write",
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 fn csv_field(s: &str) -> String {

@@ -14,7 +14,7 @@
 use super::{Case, CheckMethod, Expect, PixelWindow, Target};
 use crate::params::{Grid, Light, Medium, Phase};
 use crate::render::Method;
-use crate::scene::{Camera, Mesh, Scene};
+use crate::scene::{Camera, Scene};
 use glam::{DVec3, Vec3};
 
 /// The largest `f32` not above 0.999. (`0.999f32` itself is 0.99900001; `Spec::check` now meets
@@ -34,58 +34,9 @@ pub fn default_grid() -> Grid {
 /// below the bounds (it is the shadow map and the step count that limit it, not the numerics).
 pub const RAYMARCH: Method = Method::Raymarch { steps: 256, jitter: false };
 
-/// A quad with centre `c` and half-axes `u`, `v`.
-pub fn quad(name: &str, c: Vec3, u: Vec3, v: Vec3) -> Mesh {
-    Mesh {
-        name: name.into(),
-        positions: vec![c - u - v, c + u - v, c + u + v, c - u + v],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        albedo: Vec3::splat(0.6),
-    }
-}
-
-/// An axis-aligned box with centre `c` and half-extent `h`; `open_top` leaves out the +y face.
-pub fn cuboid(name: &str, c: Vec3, h: Vec3, open_top: bool) -> Mesh {
-    let positions = (0..8)
-        .map(|i| {
-            let s = |bit: u32| if i & bit == 0 { -1.0 } else { 1.0 };
-            c + h * Vec3::new(s(1), s(2), s(4))
-        })
-        .collect();
-    // faces: -z, +z, -y, +y, -x, +x (corner bits: 1 = x, 2 = y, 4 = z)
-    let faces: [(u32, [u32; 4]); 6] = [
-        (0, [0, 1, 3, 2]),
-        (1, [4, 6, 7, 5]),
-        (2, [0, 4, 5, 1]),
-        (3, [2, 3, 7, 6]),
-        (4, [0, 2, 6, 4]),
-        (5, [1, 5, 7, 3]),
-    ];
-    let triangles = faces
-        .iter()
-        .filter(|(k, _)| !(open_top && *k == 3))
-        .flat_map(|(_, f)| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
-        .collect();
-    Mesh { name: name.into(), positions, triangles, albedo: Vec3::splat(0.5) }
-}
-
-/// The medium most cases use: a light haze, mildly forward scattering.
-pub fn default_medium() -> Medium {
-    Medium {
-        scattering: Vec3::new(0.1, 0.08, 0.06),
-        absorption: Vec3::splat(0.02),
-        density: 1.0,
-        phase: Phase::HenyeyGreenstein { g: 0.3 },
-    }
-}
-
-pub fn point(position: Vec3, intensity: f32) -> Light {
-    Light::Point { position, intensity: Vec3::splat(intensity), radius: 0.0 }
-}
-
-pub fn directional(direction: Vec3) -> Light {
-    Light::Directional { direction: direction.normalize(), irradiance: Vec3::splat(2.0) }
-}
+// The building blocks are shared with the integration tests (`tests/common`).
+pub use crate::scene::build::haze as default_medium;
+pub use crate::scene::build::{cuboid, directional, point, quad};
 
 /// Floor, a square caster 1.5 above it and a closed box post; the eye 6 units away, looking
 /// slightly down. The default light is a point light above the caster.
@@ -98,14 +49,7 @@ pub fn floor_scene(name: &str) -> Scene {
             quad("caster", Vec3::new(0.0, 1.5, 0.0), Vec3::X * 0.5, Vec3::Z * 0.5),
             cuboid("post", Vec3::new(1.3, 0.6, -0.9), Vec3::new(0.25, 0.6, 0.25), false),
         ],
-        camera: Camera {
-            eye: Vec3::new(0.0, 1.5, 6.0),
-            target: Vec3::new(0.0, 1.0, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 50.0,
-            near: 0.01,
-            far: 100.0,
-        },
+        camera: crate::scene::build::side_camera(),
         light: point(Vec3::new(0.2, 3.0, 0.1), 10.0),
         medium: default_medium(),
         grid: default_grid(),

@@ -3,8 +3,9 @@
 use anyhow::{Context, Result};
 use epivox::bench::{self, BenchOptions, CacheStatus};
 use epivox::gpu::{GpuContext, ShaderLibrary};
+use epivox::params::Measure;
 use epivox::render::Renderer;
-use epivox::scene::{builtin_scene, load_scene};
+use epivox::scene::{builtin_scene, load_scene_with_summary};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -15,34 +16,44 @@ pub struct BenchArgs {
     /// Folder for results.csv, report.md and the plots (created when missing).
     #[arg(long, short)]
     pub out: PathBuf,
-    /// Image size as WIDTHxHEIGHT [default: 1024x1024, 64x64 with --quick].
-    #[arg(long, value_parser = super::parse_size)]
+    #[arg(long, value_parser = super::parse_size,
+          help = format!("{} [default: 1024x1024, 64x64 with --quick]", super::size_help()))]
     pub size: Option<(u32, u32)>,
     /// Tiny sweeps (two or three points per method, small scaling sweeps): for CI and smoke tests.
     #[arg(long)]
     pub quick: bool,
-    /// Frames measured per point; the report gives their median [default: 5, 3 with --quick].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    #[arg(long, value_parser = |s: &str| super::parse_count::<u32>(&Measure::FRAMES, s),
+          help = super::spec_help(
+              "Frames measured per point; the report gives their median [default: 5, 3 with --quick]",
+              &Measure::FRAMES,
+          ))]
     pub frames: Option<u32>,
-    /// Frames rendered before measuring (pipeline compilation, caches).
-    #[arg(long, default_value_t = 1)]
-    pub warmup: u32,
+    #[arg(long, value_parser = |s: &str| super::parse_count::<u32>(&Measure::WARMUP, s),
+          help = super::spec_help("Frames rendered before measuring (pipeline compilation, caches) [default: 1]",
+                                  &Measure::WARMUP))]
+    pub warmup: Option<u32>,
     /// Where reference images are cached [default: OUT/cache].
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
     /// Skip the time-against-triangles and time-against-resolution sweeps.
     #[arg(long)]
     pub no_scaling: bool,
-    /// Reference: visibility samples per view ray.
-    #[arg(long, default_value_t = 512)]
-    pub samples: usize,
+    #[arg(long, value_parser = super::parse_samples, help = super::samples_help())]
+    pub samples: Option<usize>,
 }
 
 pub fn bench(args: BenchArgs) -> Result<()> {
-    let scene = match &args.scene {
-        Some(p) => load_scene(p)?,
-        None => builtin_scene(),
+    let (scene, summary) = match &args.scene {
+        Some(p) => load_scene_with_summary(p)?,
+        None => (builtin_scene(), Default::default()),
     };
+    // The folder receives results.csv, report.md, plots and the cache: never over an input.
+    if args.out.is_file() {
+        anyhow::bail!("--out {}: is a file; bench writes a folder of results", args.out.display());
+    }
+    let mut inputs = summary.files;
+    inputs.extend(args.scene.clone());
+    super::outputs::check_not_input("--out", &args.out, &inputs)?;
     let mut opts = BenchOptions::new(&args.out, args.quick);
     if let Some((w, h)) = args.size {
         opts.width = w;
@@ -51,13 +62,17 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     if let Some(f) = args.frames {
         opts.frames = f as usize;
     }
-    opts.warmup = args.warmup as usize;
+    if let Some(w) = args.warmup {
+        opts.warmup = w as usize;
+    }
     if let Some(c) = &args.cache_dir {
         opts.cache_dir = c.clone();
     }
     opts.scaling = !args.no_scaling;
     opts.progress = true;
-    opts.reference.samples = args.samples.max(2);
+    if let Some(n) = args.samples {
+        opts.reference.samples = n;
+    }
 
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;

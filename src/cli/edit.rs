@@ -25,8 +25,7 @@ pub struct EditArgs {
 }
 
 pub fn edit(args: EditArgs) -> Result<()> {
-    // Warnings (wgpu validation, the file watcher, ...) go to stderr; RUST_LOG overrides.
-    let _ = env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).try_init();
+    // Warnings (wgpu validation, the file watcher, ...) reach stderr through `init_logging` in main.
     let measuring = args.quit_after_frames.is_some();
     let opts = EditorOptions {
         scene: args.scene,

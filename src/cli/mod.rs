@@ -3,20 +3,24 @@
 mod bench;
 mod check;
 mod edit;
+mod outputs;
 
 pub use bench::bench;
 pub use check::check;
 pub use edit::{edit, EditArgs};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
+use epivox::epipolar::{EpipolarFrame, LightGeom};
 use epivox::gpu::{GpuContext, ShaderLibrary};
-use epivox::params::{Exposure, Grid, Light};
+use epivox::params::{unit_direction, Baseline, Exposure, Grid, ImageSize, Light, ReferenceQuality, Spec, View};
 use epivox::preset::Preset;
 use epivox::render::{Method as GpuMethod, RenderOutput, Renderer};
-use epivox::scene::{builtin_scene, load_scene, Scene};
+use epivox::scene::{builtin_scene, load_scene_with_summary, LoadSummary, Scene};
 use epivox::{metrics, reference, Image};
 use glam::Vec3;
+use outputs::{Output, What};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -71,19 +75,17 @@ pub enum Method {
 pub struct RenderArgs {
     /// A mesh (.gltf .glb .obj .ply), a folder of meshes or a Mitsuba scene, or a .toml scene file.
     pub scene: Option<PathBuf>,
-    /// Output PNG (tone mapped).
+    /// Output image: .png (tone mapped, 8-bit sRGB) or .exr (the linear image, float RGB).
     #[arg(long, short)]
     pub out: PathBuf,
-    /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = parse_size, help = size_help())]
     pub size: (u32, u32),
     #[arg(long, value_enum, default_value_t = Method::Vsv)]
     pub method: Method,
     /// A preset file (medium, grid, exposure).
     #[arg(long)]
     pub preset: Option<PathBuf>,
-    /// Grid resolution PLANESxRAYSxBINS (bins a multiple of 32).
-    #[arg(long, value_parser = parse_grid)]
+    #[arg(long, value_parser = parse_grid, help = grid_help())]
     pub grid: Option<Grid>,
     /// Camera position x,y,z.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -91,19 +93,18 @@ pub struct RenderArgs {
     /// Camera target x,y,z.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub target: Option<Vec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_fov, help = spec_help("Vertical field of view", &View::FOV_Y))]
     pub fov: Option<f32>,
     /// Make the light a point light at x,y,z (keeps its intensity when it already is one).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, conflicts_with = "light_dir")]
     pub light_pos: Option<Vec3>,
-    /// Make the light directional, pointing toward x,y,z (a direction).
+    /// Make the light directional, pointing toward x,y,z (a direction: not zero).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub light_dir: Option<Vec3>,
-    /// Write the in-scattered radiance alone as float RGB OpenEXR.
+    /// Also write the in-scattered radiance alone as float RGB OpenEXR (.exr).
     #[arg(long)]
     pub scatter_exr: Option<PathBuf>,
-    /// Write the final linear image as float RGB OpenEXR.
+    /// Also write the final linear image as float RGB OpenEXR (.exr).
     #[arg(long)]
     pub hdr_exr: Option<PathBuf>,
     /// Print GPU time per pass (encoder timestamps).
@@ -112,34 +113,103 @@ pub struct RenderArgs {
     /// Print one JSON object (timings, grid, adapter, counts) on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Exposure in stops for the PNG.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_exposure,
+          help = spec_help("Exposure for the PNG", &Exposure::STOPS))]
     pub exposure: Option<f32>,
     /// Turn off fitting the work to the frame (DESIGN section 6): full bin range from the casters.
     #[arg(long)]
     pub no_prune: bool,
-    /// Reference: visibility samples per view ray.
-    #[arg(long, default_value_t = 512)]
-    pub samples: usize,
-    /// Raymarch: steps per view ray.
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub steps: u32,
-    /// Shadow-map texels per side (the surfaces' shadows, and the raymarch baseline's visibility).
-    #[arg(long = "shadow-map", value_parser = clap::value_parser!(u32).range(16..=16384))]
+    #[arg(long, value_parser = parse_samples, help = samples_help())]
+    pub samples: Option<usize>,
+    #[arg(long, value_parser = parse_steps,
+          help = spec_default_help("Raymarch: steps per view ray", &Baseline::STEPS, Baseline::default().steps))]
+    pub steps: Option<u32>,
+    #[arg(long = "shadow-map", value_parser = parse_shadow_map,
+          help = spec_default_help(
+              "Shadow-map texels per side (the surfaces' shadows, and the raymarch baseline's visibility)",
+              &Baseline::SHADOW_MAP,
+              Baseline::default().shadow_map,
+          ))]
     pub shadow_map: Option<u32>,
     /// Raymarch: offset the steps by a per-pixel random fraction (noise instead of banding).
     #[arg(long)]
     pub jitter: bool,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+// Every numeric flag takes its range from a `Spec` in `params.rs`, and its help text shows it.
+
+fn range_text(spec: &Spec) -> String {
+    let unit = if spec.unit.is_empty() { String::new() } else { format!(" {}", spec.unit) };
+    format!("[range: {}..={}{unit}]", spec.min, spec.max)
+}
+
+pub(crate) fn spec_help(what: &str, spec: &Spec) -> String {
+    format!("{what} {}", range_text(spec))
+}
+
+pub(crate) fn spec_default_help(what: &str, spec: &Spec, default: impl std::fmt::Display) -> String {
+    format!("{what} {} [default: {default}]", range_text(spec))
+}
+
+pub(crate) fn size_help() -> String {
+    format!("Image size as WIDTHxHEIGHT, each side {}", range_text(&ImageSize::SIDE))
+}
+
+fn grid_help() -> String {
+    format!(
+        "Grid resolution PLANESxRAYSxBINS: planes {}, rays {}, bins {} and a multiple of 32",
+        range_text(&Grid::PLANES),
+        range_text(&Grid::RAYS),
+        range_text(&Grid::BINS)
+    )
+}
+
+pub(crate) fn samples_help() -> String {
+    spec_default_help(
+        "Reference: visibility samples per view ray",
+        &ReferenceQuality::SAMPLES,
+        reference::ReferenceOptions::default().samples,
+    )
+}
+
+/// A whole number within `spec`.
+pub(crate) fn parse_count<T: TryFrom<u64>>(spec: &Spec, s: &str) -> Result<T, String> {
+    let v: u64 = s.trim().parse().map_err(|_| format!("'{s}' is not a whole number {}", range_text(spec)))?;
+    spec.check(v as f64).map_err(|e| e.to_string())?;
+    T::try_from(v).map_err(|_| format!("{} = {v} is too large", spec.name))
+}
+
+/// A finite number within `spec`.
+fn parse_number(spec: &Spec, s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number {}", range_text(spec)))?;
+    spec.check(v as f64).map_err(|e| e.to_string())?;
+    Ok(v)
+}
+
+pub(crate) fn parse_samples(s: &str) -> Result<usize, String> {
+    parse_count(&ReferenceQuality::SAMPLES, s)
+}
+
+fn parse_steps(s: &str) -> Result<u32, String> {
+    parse_count(&Baseline::STEPS, s)
+}
+
+fn parse_shadow_map(s: &str) -> Result<u32, String> {
+    parse_count(&Baseline::SHADOW_MAP, s)
+}
+
+fn parse_fov(s: &str) -> Result<f32, String> {
+    parse_number(&View::FOV_Y, s).map_err(|e| format!("the vertical field of view: {e}"))
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    parse_number(&Exposure::STOPS, s)
+}
+
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 512x512"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("'{s}': width is not a whole number"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("'{s}': height is not a whole number"))?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("'{s}': width and height must lie in 1..=16384"));
-    }
-    Ok((w, h))
+    let side = |v: &str, what: &str| parse_count::<u32>(&ImageSize::SIDE, v).map_err(|e| format!("{what}: {e}"));
+    Ok((side(w, "width")?, side(h, "height")?))
 }
 
 fn parse_grid(s: &str) -> Result<Grid, String> {
@@ -158,17 +228,87 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::new(v[0], v[1], v[2]))
 }
 
+/// Sets up logging for every command: `warn` and above to stderr unless `RUST_LOG` says otherwise,
+/// one line per message, control characters escaped.
+pub fn init_logging() {
+    use std::io::Write;
+    let env = env_logger::Env::default().default_filter_or("warn");
+    let _ = env_logger::Builder::from_env(env)
+        .format(|buf, record| {
+            let level = match record.level() {
+                log::Level::Error => "error",
+                log::Level::Warn => "warning",
+                log::Level::Info => "info",
+                log::Level::Debug => "debug",
+                log::Level::Trace => "trace",
+            };
+            let text = record.args().to_string();
+            let text = escape_controls(&text);
+            let target = record.target();
+            if target.starts_with("epivox") {
+                writeln!(buf, "{level}: {text}")
+            } else {
+                writeln!(buf, "{level} ({target}): {text}")
+            }
+        })
+        .try_init();
+}
+
+/// `text` with every control character but the line break written as an escape (`\u{1b}`), so
+/// that names from files and flags cannot move the cursor, recolour or retitle the terminal.
+pub fn escape_controls(text: &str) -> Cow<'_, str> {
+    if !text.chars().any(|c| c.is_control() && c != '\n') {
+        return Cow::Borrowed(text);
+    }
+    Cow::Owned(
+        text.chars()
+            .map(|c| if c.is_control() && c != '\n' { c.escape_default().to_string() } else { c.to_string() })
+            .collect(),
+    )
+}
+
+/// An error with its causes, each said once: a cause whose text the message already holds (a
+/// library error that prints its source and also returns it from `source()`) is left out.
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    escape_controls(&out).into_owned()
+}
+
+/// The scene as the command line asks for it, and what it was made from.
+struct Built {
+    scene: Scene,
+    exposure: Option<f32>,
+    /// The scene file for messages ("built-in scene" without one).
+    source: String,
+    summary: LoadSummary,
+    /// Every file read: outputs must not be written over them.
+    inputs: Vec<PathBuf>,
+}
+
 /// Loads the scene and applies every override from the command line, validating the result.
-fn build_scene(args: &RenderArgs) -> Result<(Scene, Option<f32>)> {
-    let mut scene = match &args.scene {
-        Some(p) => load_scene(p)?,
-        None => builtin_scene(),
+fn build_scene(args: &RenderArgs) -> Result<Built> {
+    let (mut scene, summary) = match &args.scene {
+        Some(p) => load_scene_with_summary(p)?,
+        None => (builtin_scene(), LoadSummary::default()),
     };
+    let mut inputs = summary.files.clone();
+    inputs.extend(args.scene.clone());
     let mut exposure = None;
     if let Some(p) = &args.preset {
         let preset = Preset::load(p)?;
         preset.apply(&mut scene);
         exposure = preset.exposure;
+        inputs.push(p.clone());
     }
     if let Some(g) = args.grid {
         scene.grid = g;
@@ -207,39 +347,56 @@ fn build_scene(args: &RenderArgs) -> Result<(Scene, Option<f32>)> {
                 intensity / (dist * dist)
             }
         };
-        if d.length() < 1e-6 {
-            anyhow::bail!("--light-dir {d}: the direction must not be zero");
-        }
-        scene.light = Light::Directional { direction: d, irradiance }.normalized();
+        let direction = unit_direction("--light-dir direction", d)?;
+        scene.light = Light::Directional { direction, irradiance };
     }
-    let where_ = args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "built-in scene".into());
-    scene.validate().with_context(|| format!("{where_} with the command-line overrides"))?;
+    let source = args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "built-in scene".into());
+    let overrides = args.eye.is_some()
+        || args.target.is_some()
+        || args.fov.is_some()
+        || args.light_pos.is_some()
+        || args.light_dir.is_some()
+        || args.grid.is_some()
+        || args.preset.is_some();
+    let with = if overrides { " with the command-line overrides" } else { "" };
+    scene.validate().with_context(|| format!("{source}{with}"))?;
+    // Every method needs epipolar planes; say so before a GPU or the reference starts.
+    if EpipolarFrame::new(scene.camera.eye.as_dvec3(), LightGeom::from(&scene.light)).is_none() {
+        bail!("{source}{with}: the eye sits exactly on the point light; move one of them");
+    }
     if let Some(e) = args.exposure {
-        Exposure::STOPS.check(e as f64).context("--exposure")?;
         exposure = Some(e);
     }
-    Ok((scene, exposure))
+    Ok(Built { scene, exposure, source, summary, inputs })
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
-    let (scene, exposure) = build_scene(&args)?;
+    let Built { scene, exposure, source, summary, inputs } = build_scene(&args)?;
+    // Checked before the (possibly long) render: formats, folders, clashes with inputs and each other.
+    let mut wanted = vec![Output::new("--out", &args.out, What::Final)];
+    wanted.extend(args.scatter_exr.as_ref().map(|p| Output::new("--scatter-exr", p, What::Scatter)));
+    wanted.extend(args.hdr_exr.as_ref().map(|p| Output::new("--hdr-exr", p, What::Hdr)));
+    let outputs = outputs::plan(wanted, &inputs)?;
     let (w, h) = args.size;
     let exposure = exposure.unwrap_or(0.0);
+    let steps = args.steps.unwrap_or(Baseline::default().steps);
     let pixels = w as u64 * h as u64;
     let started = Instant::now();
 
     let mut pruned_z = None;
     let (hdr, scatter, out, adapter): (Image, Image, Option<RenderOutput>, String) = match args.method {
         Method::Reference => {
-            let opts =
-                reference::ReferenceOptions { samples: args.samples, progress: !args.json, ..Default::default() };
+            let mut opts = reference::ReferenceOptions { progress: !args.json, ..Default::default() };
+            if let Some(n) = args.samples {
+                opts.samples = n;
+            }
             let r = reference::render(&scene, w, h, &opts);
             (r.hdr, r.scatter, None, "cpu reference (f64)".to_string())
         }
         Method::Vsv | Method::Cartesian | Method::Raymarch => {
             let method = match args.method {
                 Method::Cartesian => GpuMethod::Cartesian,
-                Method::Raymarch => GpuMethod::Raymarch { steps: args.steps, jitter: args.jitter },
+                Method::Raymarch => GpuMethod::Raymarch { steps, jitter: args.jitter },
                 _ => GpuMethod::Vsv,
             };
             let ctx = GpuContext::headless()?;
@@ -248,22 +405,16 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 renderer.set_shadow_map_size(size).context("--shadow-map")?;
             }
             renderer.prune = !args.no_prune;
-            let o = renderer.render(&scene, w, h, method)?;
+            let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())
         }
     };
     let wall_ms = started.elapsed().as_secs_f64() * 1e3;
     if hdr.count_non_finite() > 0 || scatter.count_non_finite() > 0 {
-        eprintln!("warning: the image has {} non-finite values", hdr.count_non_finite() + scatter.count_non_finite());
+        log::warn!("the image has {} non-finite values", hdr.count_non_finite() + scatter.count_non_finite());
     }
-    hdr.write_png(&args.out, exposure)?;
-    if let Some(p) = &args.scatter_exr {
-        scatter.write_exr(p)?;
-    }
-    if let Some(p) = &args.hdr_exr {
-        hdr.write_exr(p)?;
-    }
+    outputs::write_all(&outputs, &hdr, &scatter, exposure)?;
 
     let timings = out.as_ref().map(|o| o.timings.clone()).unwrap_or_default();
     let total_ms: f64 = timings.iter().map(|t| t.ms).sum();
@@ -276,6 +427,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             "adapter": adapter,
             "width": w, "height": h, "pixels": pixels,
             "triangles": scene.triangle_count(),
+            "degenerate_triangles_dropped": summary.degenerate_triangles,
             "grid": scene.grid.to_string(),
             "passes_ms": passes,
             "total_ms": total_ms,
@@ -291,14 +443,18 @@ pub fn render(args: RenderArgs) -> Result<()> {
             j["pruning"] = serde_json::to_value(p)?;
         }
         if args.method == Method::Raymarch {
-            j["steps"] = serde_json::json!(args.steps);
+            j["steps"] = serde_json::json!(steps);
             j["jitter"] = serde_json::json!(args.jitter);
             j["shadow_map"] = serde_json::json!(args.shadow_map.unwrap_or(Renderer::SHADOW_MAP_SIZE));
         }
         println!("{}", serde_json::to_string_pretty(&j)?);
     } else {
-        eprintln!(
-            "{} {}x{} ({} triangles, grid {}) -> {} in {:.0} ms wall",
+        let dropped = match summary.degenerate_triangles {
+            0 => String::new(),
+            n => format!(", {n} zero-area dropped"),
+        };
+        let line = format!(
+            "{} {}x{} ({} triangles{dropped}, grid {}) -> {} in {:.0} ms wall",
             scene.name,
             w,
             h,
@@ -307,6 +463,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             args.out.display(),
             wall_ms
         );
+        eprintln!("{}", escape_controls(&line));
         if args.timings {
             if timings.is_empty() {
                 println!(
@@ -359,7 +516,7 @@ pub fn compare(a: &Path, b: &Path, json: bool) -> Result<()> {
     if json {
         println!("{}", serde_json::to_string_pretty(&stats.to_json())?);
     } else {
-        println!("{} vs {}: {stats}", a.display(), b.display());
+        println!("{}", escape_controls(&format!("{} vs {}: {stats}", a.display(), b.display())));
     }
     Ok(())
 }

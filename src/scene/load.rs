@@ -13,7 +13,7 @@ pub(super) mod primitives;
 mod scene_file;
 
 use super::{Aabb, Camera, Mesh, Scene};
-use crate::params::{Grid, Light, Medium, ParamError, Phase};
+use crate::params::{unit_direction, Grid, Light, Medium, ParamError, Phase};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -23,6 +23,9 @@ pub enum SceneError {
     /// The path does not exist.
     #[error("{}: no such file or directory", .path.display())]
     NotFound { path: PathBuf },
+    /// The path, or a folder or link on the way to it, is a loop of symbolic links.
+    #[error("{}: a loop of symbolic links", .path.display())]
+    SymlinkLoop { path: PathBuf },
     /// The file exists but could not be read.
     #[error("{}: cannot read: {source}", .path.display())]
     Io {
@@ -65,6 +68,7 @@ impl SceneError {
     pub fn path(&self) -> &Path {
         match self {
             SceneError::NotFound { path }
+            | SceneError::SymlinkLoop { path }
             | SceneError::Io { path, .. }
             | SceneError::UnsupportedExtension { path, .. }
             | SceneError::Parse { path, .. }
@@ -77,6 +81,8 @@ impl SceneError {
     pub(crate) fn io(path: &Path, source: std::io::Error) -> SceneError {
         if source.kind() == std::io::ErrorKind::NotFound {
             SceneError::NotFound { path: path.to_path_buf() }
+        } else if is_symlink_loop(&source) {
+            SceneError::SymlinkLoop { path: path.to_path_buf() }
         } else {
             SceneError::Io { path: path.to_path_buf(), source }
         }
@@ -93,6 +99,25 @@ impl SceneError {
     pub(crate) fn referenced(path: &Path, context: impl Into<String>, source: SceneError) -> SceneError {
         SceneError::Referenced { path: path.to_path_buf(), context: context.into(), source: Box::new(source) }
     }
+}
+
+/// `ELOOP`: `io::ErrorKind::FilesystemLoop` is not stable yet.
+fn is_symlink_loop(e: &std::io::Error) -> bool {
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    const ELOOP: i32 = 40;
+    #[cfg(not(any(target_os = "linux", target_os = "android")))]
+    const ELOOP: i32 = 62; // macOS and the BSDs
+    cfg!(unix) && e.raw_os_error() == Some(ELOOP)
+}
+
+/// What loading did besides building the scene, for the command line's summary.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadSummary {
+    /// Every file read: the scene file (or the folder's files), the meshes it references, MTL
+    /// libraries, external glTF buffers. Outputs must never be written over one of these.
+    pub files: Vec<PathBuf>,
+    /// Zero-area triangles dropped at load ([`Mesh::drop_degenerate`]).
+    pub degenerate_triangles: usize,
 }
 
 /// Diffuse albedo of surfaces whose file gives no usable colour.
@@ -277,6 +302,8 @@ pub(crate) struct Loaded {
     pub grid: Option<Grid>,
     /// Scene name given by the file itself.
     pub name: Option<String>,
+    /// Every file read so far (see [`LoadSummary::files`]).
+    pub files: Vec<PathBuf>,
 }
 
 impl Loaded {
@@ -285,6 +312,7 @@ impl Loaded {
     pub(crate) fn merge(&mut self, other: Loaded) {
         self.meshes.extend(other.meshes);
         self.emitters.extend(other.emitters);
+        self.files.extend(other.files);
         self.camera = self.camera.or(other.camera);
         self.light = self.light.or(other.light);
         self.medium = self.medium.or(other.medium);
@@ -308,6 +336,11 @@ impl Loaded {
 /// Whatever the file lacks is filled in from the scene's bounds (see `docs/scene-format.md`), and the
 /// result is validated: an `Ok` scene is renderable.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    load_scene_with_summary(path).map(|(scene, _)| scene)
+}
+
+/// [`load_scene`], also saying which files were read and what was dropped.
+pub fn load_scene_with_summary(path: &Path) -> Result<(Scene, LoadSummary), SceneError> {
     let meta = std::fs::metadata(path).map_err(|e| SceneError::io(path, e))?;
     let (loaded, name) = if meta.is_dir() {
         let xml = path.join("scene.xml");
@@ -372,8 +405,18 @@ fn load_folder(dir: &Path) -> Result<Loaded, SceneError> {
     for entry in entries {
         let entry = entry.map_err(|e| SceneError::io(dir, e))?;
         let p = entry.path();
-        if p.is_file() && matches!(extension(&p).as_str(), "gltf" | "glb" | "obj" | "ply") {
-            files.push(p);
+        if !matches!(extension(&p).as_str(), "gltf" | "glb" | "obj" | "ply") {
+            continue;
+        }
+        // A mesh file that cannot even be looked at (a link loop, a dangling link) is an error
+        // naming it, not a silently missing part of the scene.
+        match std::fs::metadata(&p) {
+            Ok(m) if m.is_file() => files.push(p),
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Err(SceneError::unsupported(&p, "a symbolic link to nothing"));
+            }
+            Err(e) => return Err(SceneError::io(&p, e)),
         }
     }
     files.sort();
@@ -475,11 +518,15 @@ fn emitter_light(e: &Emitter, height: f32, core_diag: f32) -> Option<Light> {
 }
 
 /// Fills in what the file lacks, validates and builds the [`Scene`].
-pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<Scene, SceneError> {
-    let Loaded { mut meshes, camera, light, mut emitters, medium, grid, .. } = loaded;
+pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<(Scene, LoadSummary), SceneError> {
+    let Loaded { mut meshes, camera, light, mut emitters, medium, grid, files, .. } = loaded;
     if light.is_some() {
         // An explicit light wins: emissive surfaces stay ordinary geometry.
         meshes.extend(std::mem::take(&mut emitters).into_iter().map(Emitter::into_mesh));
+    }
+    let degenerate: usize = meshes.iter_mut().map(Mesh::drop_degenerate).sum();
+    if degenerate > 0 {
+        log::info!("{}: {degenerate} zero-area triangles dropped", path.display());
     }
     meshes.retain(|m| !m.triangles.is_empty());
     let invalid = |source: ParamError| SceneError::Invalid { path: path.to_path_buf(), source };
@@ -495,7 +542,11 @@ pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<Scene,
         grid: Grid::default(),
     };
     if probe.triangle_count() == 0 {
-        return Err(invalid(ParamError::Invalid("the scene has no triangles".into())));
+        let dropped = match degenerate {
+            0 => String::new(),
+            n => format!(" ({n} zero-area triangles dropped)"),
+        };
+        return Err(invalid(ParamError::Invalid(format!("the scene has no triangles{dropped}"))));
     }
     probe.validate().map_err(invalid)?;
     let meshes = probe.meshes;
@@ -513,14 +564,17 @@ pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<Scene,
     let target = match (spec.target, spec.dir) {
         (Some(t), _) => t,
         (None, Some(d)) => {
-            let d = d.normalize_or_zero();
+            let d = unit_direction("camera direction", d).map_err(invalid)?;
             let focus = d.dot(center - eye).max(0.1 * core.radius()).max(1e-6);
             eye + d * focus
         }
         (None, None) if spec.eye.is_some() => full.center(),
         (None, None) => framing.target,
     };
-    let up = spec.up.map(|u| u.normalize_or(Vec3::Y)).unwrap_or(Vec3::Y);
+    let up = match spec.up {
+        Some(u) => unit_direction("camera up", u).map_err(invalid)?,
+        None => Vec3::Y,
+    };
     let near = spec.near.unwrap_or(1e-3 * core_diag);
     let far = spec.far.unwrap_or_else(|| ((eye - full.center()).length() + 4.0 * full_diag).max(near * 10.0));
     let camera = Camera { eye, target, up, fov_y_deg: spec.fov_y_deg.unwrap_or(framing.fov_y_deg), near, far };
@@ -538,10 +592,10 @@ pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<Scene,
                 radius,
             }
         }
-        Some(LightSpec::Directional { direction, irradiance }) => {
-            Light::Directional { direction, irradiance: irradiance.unwrap_or(Vec3::splat(DEFAULT_SUN_IRRADIANCE)) }
-                .normalized()
-        }
+        Some(LightSpec::Directional { direction, irradiance }) => Light::Directional {
+            direction: unit_direction("light direction", direction).map_err(invalid)?,
+            irradiance: irradiance.unwrap_or(Vec3::splat(DEFAULT_SUN_IRRADIANCE)),
+        },
         None => {
             let best = emitters
                 .iter()
@@ -592,7 +646,7 @@ pub(crate) fn finish(path: &Path, name: String, loaded: Loaded) -> Result<Scene,
     let scene =
         Scene { name, source: Some(path.to_path_buf()), meshes, camera, light, medium, grid: grid.unwrap_or_default() };
     scene.validate().map_err(invalid)?;
-    Ok(scene)
+    Ok((scene, LoadSummary { files, degenerate_triangles: degenerate }))
 }
 
 /// Row-major 4x4 (16 numbers) or 3x3 (9 numbers) matrix text, as Mitsuba writes it.

@@ -4,16 +4,17 @@
 //! and nothing else. Meshes are flattened to world space at load time (node transforms applied), so
 //! the renderers never see a hierarchy.
 
-use crate::params::{Grid, Light, Medium, ParamError};
+use crate::params::{Grid, Light, Medium, ParamError, Surface, View};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
+pub mod build;
 mod builtin;
 mod load;
 
 pub use builtin::builtin_scene;
-pub use load::{load_scene, SceneError};
+pub use load::{load_scene, load_scene_with_summary, LoadSummary, SceneError};
 
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,6 +71,27 @@ impl Mesh {
         b
     }
 
+    /// Removes the triangles whose area is zero to `f32` precision (two corners equal, or all three
+    /// on one line: the height over the longest edge below 2^-24 of that edge) and returns how many
+    /// went. They cover nothing, yet every pass would pay for them. Triangles indexing past the
+    /// vertices are kept for [`Scene::validate`] to report.
+    pub fn drop_degenerate(&mut self) -> usize {
+        let before = self.triangles.len();
+        let positions = &self.positions;
+        self.triangles.retain(|t| {
+            let corner = |i: u32| positions.get(i as usize).map(|p| p.as_dvec3());
+            let (Some(a), Some(b), Some(c)) = (corner(t[0]), corner(t[1]), corner(t[2])) else {
+                return true;
+            };
+            let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+            let twice_area = (b - a).cross(c - a).length();
+            // NaN corners compare as not degenerate: validation reports them.
+            let degenerate = twice_area <= f64::from(f32::EPSILON) * 0.5 * longest;
+            !degenerate
+        });
+        before - self.triangles.len()
+    }
+
     /// Applies an affine transform to every vertex.
     pub fn transform(&mut self, m: Mat4) {
         for p in &mut self.positions {
@@ -86,7 +108,7 @@ pub struct Camera {
     pub target: Vec3,
     #[serde(default = "default_up")]
     pub up: Vec3,
-    /// Vertical field of view in degrees, (0, 180).
+    /// Vertical field of view in degrees ([`View::FOV_Y`]).
     pub fov_y_deg: f32,
     /// Near clipping distance (> 0).
     #[serde(default = "default_near")]
@@ -130,11 +152,18 @@ impl Camera {
         if fwd.length() < 1e-12 * (1.0 + self.eye.length()) {
             return bad("eye and target coincide");
         }
+        if self.up.length() < 1e-12 {
+            return bad(&format!("up = {} is not a direction", self.up));
+        }
         if fwd.normalize().cross(self.up.normalize_or_zero()).length() < 1e-6 {
             return bad("the up vector is parallel to the view direction");
         }
-        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
-            return bad("the vertical field of view must lie in (0, 179) degrees");
+        let fov = View::FOV_Y;
+        if fov.check(self.fov_y_deg as f64).is_err() {
+            return bad(&format!(
+                "the vertical field of view (fov_y_deg = {}) must lie in [{}, {}] degrees",
+                self.fov_y_deg, fov.min, fov.max
+            ));
         }
         if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
             return bad("near must be > 0 and far > near");
@@ -282,6 +311,7 @@ impl Scene {
                     m.name
                 )));
             }
+            Surface::ALBEDO.check_rgb(m.albedo).map_err(|e| ParamError::Invalid(format!("mesh '{}': {e}", m.name)))?;
         }
         self.camera.validate()?;
         self.light.validate()?;

@@ -2,10 +2,10 @@
 #![allow(dead_code)]
 
 use epivox::gpu::{GpuContext, GpuError, ShaderLibrary};
-use epivox::params::{Grid, Light, Medium, Phase};
+use epivox::params::{Grid, Light};
 use epivox::reference::{self, ReferenceOptions};
 use epivox::render::{Method, Renderer};
-use epivox::scene::{Camera, Mesh, Scene};
+use epivox::scene::{Mesh, Scene};
 use epivox::{metrics, Image};
 use glam::Vec3;
 
@@ -22,30 +22,13 @@ pub fn renderer() -> Option<Renderer> {
     }
 }
 
-pub fn quad(name: &str, c: Vec3, u: Vec3, v: Vec3) -> Mesh {
-    Mesh {
-        name: name.into(),
-        positions: vec![c - u - v, c + u - v, c + u + v, c - u + v],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        albedo: Vec3::splat(0.6),
-    }
-}
+// The scene builders are the library's, shared with the `check` cases.
+pub use epivox::scene::build::quad;
+use epivox::scene::build::{cuboid, haze, point, side_camera};
 
 /// A closed axis-aligned box (12 triangles).
 pub fn cube(name: &str, c: Vec3, h: Vec3) -> Mesh {
-    let mut positions = Vec::new();
-    for i in 0..8 {
-        positions.push(
-            c + h * Vec3::new(
-                if i & 1 == 0 { -1.0 } else { 1.0 },
-                if i & 2 == 0 { -1.0 } else { 1.0 },
-                if i & 4 == 0 { -1.0 } else { 1.0 },
-            ),
-        );
-    }
-    let faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
-    let triangles = faces.iter().flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]]).collect();
-    Mesh { name: name.into(), positions, triangles, albedo: Vec3::splat(0.5) }
+    cuboid(name, c, h, false)
 }
 
 /// A floor with a square occluder above it, seen from the side.
@@ -57,27 +40,15 @@ pub fn occluder_scene(light: Light) -> Scene {
             quad("floor", Vec3::ZERO, Vec3::X * 4.0, Vec3::Z * 4.0),
             quad("occluder", Vec3::new(0.0, 1.5, 0.0), Vec3::X * 0.5, Vec3::Z * 0.5),
         ],
-        camera: Camera {
-            eye: Vec3::new(0.0, 1.5, 6.0),
-            target: Vec3::new(0.0, 1.0, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 50.0,
-            near: 0.01,
-            far: 100.0,
-        },
+        camera: side_camera(),
         light,
-        medium: Medium {
-            scattering: Vec3::new(0.1, 0.08, 0.06),
-            absorption: Vec3::splat(0.02),
-            density: 1.0,
-            phase: Phase::HenyeyGreenstein { g: 0.3 },
-        },
+        medium: haze(),
         grid: Grid { planes: 512, rays: 512, bins: 128, ..Grid::default() },
     }
 }
 
 pub fn point_light(p: Vec3) -> Light {
-    Light::Point { position: p, intensity: Vec3::splat(10.0), radius: 0.0 }
+    point(p, 10.0)
 }
 
 /// Renders with the GPU and the reference and returns (gpu scatter, reference scatter, stats).

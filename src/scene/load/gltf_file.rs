@@ -5,7 +5,8 @@
 //! KHR_lights_punctual light, emissive materials (see [`super::Emitter`]). Ignored: textures, normals,
 //! skins, morph targets, animations, images (never decoded).
 
-use super::{CameraSpec, Emitter, LightSpec, Loaded, SceneError, DEFAULT_ALBEDO};
+use super::{CameraSpec, Emitter, LightSpec, Loaded, SceneError};
+use crate::params::{Light, ParamError};
 use crate::scene::Mesh;
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -18,6 +19,7 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
     let bytes = std::fs::read(path).map_err(|e| SceneError::io(path, e))?;
     let (document, blob) = parse(path, &bytes)?;
     let base = path.parent().unwrap_or(Path::new("."));
+    let mut files = vec![path.to_path_buf()];
     // Check external buffers first: the crate's error does not name a missing file, and it panics
     // on a relative URI whose percent-decoding is not UTF-8.
     for b in document.buffers() {
@@ -30,6 +32,7 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
             if !base.join(&file).is_file() {
                 return Err(bad("no such file or directory"));
             }
+            files.push(base.join(&file));
         }
     }
     let buffers =
@@ -58,7 +61,7 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
         path,
         buffers: &buffers,
         visited: vec![false; document.nodes().len()],
-        out: Loaded::default(),
+        out: Loaded { files, ..Loaded::default() },
         emissive_found: false,
     };
     // Explicit stack (depth-first, children in order) so that deep trees cannot overflow.
@@ -89,6 +92,17 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>),
             .map_err(|_| SceneError::parse(path, FORMAT, "malformed document"))?
             .map_err(|e| SceneError::parse(path, FORMAT, e))
     };
+    // The crate subtracts the header's size from a GLB's declared length unchecked.
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
+        let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+        if length < 12 {
+            return Err(SceneError::parse(
+                path,
+                FORMAT,
+                format!("GLB header: length {length} is shorter than the header"),
+            ));
+        }
+    }
     let raw = guarded(&|| gltf::Gltf::from_slice_without_validation(bytes))?;
     let root = raw.document.into_json();
     for (mi, mesh) in root.meshes.iter().enumerate() {
@@ -155,7 +169,16 @@ impl Walker<'_> {
         }
         if self.out.light.is_none() {
             if let Some(light) = node.light() {
-                let power = Vec3::from(light.color()) * light.intensity();
+                // Colour and intensity separately: two negatives would multiply to a positive power.
+                let bad = |e: ParamError| {
+                    SceneError::parse(self.path, FORMAT, format!("light '{}' of node '{name}': {e}", light.index()))
+                };
+                let color = Vec3::from(light.color());
+                if !(color.is_finite() && color.min_element() >= 0.0) {
+                    return Err(bad(ParamError::Invalid(format!("color = {color} must be finite and >= 0"))));
+                }
+                Light::INTENSITY.check(light.intensity() as f64).map_err(bad)?;
+                let power = color * light.intensity();
                 use gltf::khr_lights_punctual::Kind;
                 self.out.light = Some(match light.kind() {
                     Kind::Directional => {
@@ -215,8 +238,8 @@ impl Walker<'_> {
 
         let material = prim.material();
         let base = material.pbr_metallic_roughness().base_color_factor();
+        // Out of [0, 1] or NaN is refused by the scene's validation, naming the mesh.
         let albedo = Vec3::new(base[0], base[1], base[2]);
-        let albedo = if albedo.is_finite() { albedo.clamp(Vec3::ZERO, Vec3::ONE) } else { DEFAULT_ALBEDO };
         let emissive = Vec3::from(material.emissive_factor());
         let named_light = material.name().is_some_and(|m| m.eq_ignore_ascii_case("light"));
         if named_light || emissive.max_element() > 0.0 {

@@ -64,8 +64,9 @@ pub(crate) fn load(xml_path: &Path) -> Result<Loaded, SceneError> {
             ctx.bsdfs.entry(id).or_insert(b);
         }
     }
+    ctx.check_refs(root)?;
 
-    let mut out = Loaded::default();
+    let mut out = Loaded { files: vec![xml_path.to_path_buf()], ..Loaded::default() };
     let mut jobs = Vec::new();
     for (i, node) in root.children().filter(|n| n.is_element()).enumerate() {
         match node.tag_name().name() {
@@ -95,6 +96,72 @@ impl<'a, 'input> Ctx<'a, 'input> {
     fn err(&self, node: Node, message: impl std::fmt::Display) -> SceneError {
         let pos = node.document().text_pos_at(node.range().start);
         SceneError::parse(self.path, FORMAT, format!("line {}: {message}", pos.row))
+    }
+
+    /// Every `<ref id>` names an element of the file, and no element reaches itself through refs
+    /// (Mitsuba refuses both; following them would silently fall back to grey).
+    fn check_refs(&self, root: Node<'a, 'input>) -> Result<(), SceneError> {
+        let mut ids: HashMap<&str, Node> = HashMap::new();
+        for n in root.descendants().filter(|n| n.is_element() && !n.has_tag_name("ref")) {
+            if let Some(id) = n.attribute("id") {
+                ids.entry(id).or_insert(n);
+            }
+        }
+        for r in root.descendants().filter(|n| n.has_tag_name("ref")) {
+            match r.attribute("id") {
+                None => return Err(self.err(r, "<ref> without an id")),
+                Some(id) if !ids.contains_key(id) => {
+                    return Err(self.err(r, format!("<ref id=\"{id}\"> refers to nothing (no element has that id)")))
+                }
+                Some(_) => {}
+            }
+        }
+        // Depth-first over the id graph (an element -> the ids its refs name), iteratively.
+        #[derive(Clone, Copy, PartialEq)]
+        enum Mark {
+            Open,
+            Done,
+        }
+        let refs_of = |n: Node<'a, 'input>| -> Vec<(&'a str, Node<'a, 'input>)> {
+            n.descendants().filter(|c| c.has_tag_name("ref")).filter_map(|c| Some((c.attribute("id")?, c))).collect()
+        };
+        let mut mark: HashMap<&str, Mark> = HashMap::new();
+        let mut starts: Vec<&str> = ids.keys().copied().collect();
+        starts.sort_unstable();
+        for start in starts {
+            if mark.contains_key(start) {
+                continue;
+            }
+            // (id, its refs, next ref to follow)
+            let mut stack = vec![(start, refs_of(ids[start]), 0usize)];
+            mark.insert(start, Mark::Open);
+            while let Some(top) = stack.last_mut() {
+                let Some(&(next, node)) = top.1.get(top.2) else {
+                    mark.insert(top.0, Mark::Done);
+                    stack.pop();
+                    continue;
+                };
+                top.2 += 1;
+                match mark.get(next) {
+                    Some(Mark::Done) => {}
+                    Some(Mark::Open) => {
+                        let from = stack.iter().position(|(id, ..)| *id == next).unwrap_or(0);
+                        let mut chain: Vec<&str> = stack[from..].iter().map(|(id, ..)| *id).collect();
+                        chain.push(next);
+                        return Err(self.err(
+                            node,
+                            format!("<ref id=\"{next}\"> makes a cycle of references: {}", chain.join(" -> ")),
+                        ));
+                    }
+                    None => {
+                        mark.insert(next, Mark::Open);
+                        let refs = refs_of(ids[next]);
+                        stack.push((next, refs, 0));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Attribute value with `$name` defaults substituted.
@@ -287,7 +354,7 @@ impl<'a, 'input> Ctx<'a, 'input> {
             .children()
             .filter(|c| c.has_tag_name("bsdf") || c.has_tag_name("ref"))
             .find_map(|c| self.bsdf_albedo(c, 0))
-            .map(|a| a.clamp(Vec3::ZERO, Vec3::ONE))
+            // Out of [0, 1] is refused by the scene's validation, naming the shape.
             .unwrap_or(DEFAULT_ALBEDO)
     }
 
@@ -299,6 +366,9 @@ impl<'a, 'input> Ctx<'a, 'input> {
         let emission = match node.children().find(|c| c.has_tag_name("emitter")) {
             Some(e) if e.attribute("type") == Some("area") => {
                 let r = self.prop(e, &["radiance"]).and_then(|p| self.spectrum(p));
+                if let Some(r) = r {
+                    crate::params::Light::RADIANCE.check_rgb(r).map_err(|err| self.err(e, err))?;
+                }
                 if r.is_none() {
                     log::warn!(
                         "{}: area emitter without a constant radiance; its power is estimated",
@@ -346,6 +416,9 @@ impl<'a, 'input> Ctx<'a, 'input> {
                     None => Vec3::ZERO,
                 };
                 let radius = self.float(node, &["radius"])?.unwrap_or(1.0);
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(self.err(node, format!("sphere radius = {radius} must be > 0")));
+                }
                 let mut mesh = primitives::sphere(&label("sphere"), center, radius, 24, 48, albedo);
                 mesh.transform(to_world);
                 let c = to_world.transform_point3(center);

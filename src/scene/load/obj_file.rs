@@ -8,7 +8,7 @@
 use super::{Emitter, Loaded, SceneError, DEFAULT_ALBEDO};
 use crate::scene::Mesh;
 use glam::Vec3;
-use std::io::BufReader;
+use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
 
 const FORMAT: &str = "OBJ";
@@ -24,12 +24,14 @@ pub(crate) enum Materials {
 
 pub(crate) fn load(path: &Path, materials: Materials) -> Result<Loaded, SceneError> {
     let file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
-    let mut reader = BufReader::with_capacity(1 << 16, file);
+    let mut reader = PositionsOnly::new(BufReader::with_capacity(1 << 16, file));
     let options = tobj::LoadOptions { single_index: false, triangulate: true, ignore_points: true, ignore_lines: true };
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mtl_files = std::cell::RefCell::new(Vec::new());
     let (models, mtl) = tobj::load_obj_buf(&mut reader, &options, |mtl: &Path| match materials {
         Materials::FromMtl => {
             let mtl_path = dir.join(mtl);
+            mtl_files.borrow_mut().push(mtl_path.clone());
             let result = tobj::load_mtl(&mtl_path);
             if let Err(e) = &result {
                 log::warn!("{}: material library {}: {e}; using grey", path.display(), mtl_path.display());
@@ -42,7 +44,8 @@ pub(crate) fn load(path: &Path, materials: Materials) -> Result<Loaded, SceneErr
     let mtl = mtl.unwrap_or_default();
 
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("obj");
-    let mut out = Loaded::default();
+    let mut out = Loaded { files: vec![path.to_path_buf()], ..Loaded::default() };
+    out.files.extend(mtl_files.into_inner());
     let many = models.len() > 1;
     for model in models {
         let m = model.mesh;
@@ -57,12 +60,8 @@ pub(crate) fn load(path: &Path, materials: Materials) -> Result<Loaded, SceneErr
         let (albedo, emissive) = match materials {
             Materials::Fixed(a) => (a, None),
             Materials::FromMtl => {
-                let albedo = material
-                    .and_then(|mat| mat.diffuse)
-                    .map(Vec3::from)
-                    .filter(|a| a.is_finite())
-                    .map(|a| a.clamp(Vec3::ZERO, Vec3::ONE))
-                    .unwrap_or(DEFAULT_ALBEDO);
+                // Out of [0, 1] or NaN is refused by the scene's validation, naming the mesh.
+                let albedo = material.and_then(|mat| mat.diffuse).map(Vec3::from).unwrap_or(DEFAULT_ALBEDO);
                 let emissive = material.and_then(|mat| {
                     let ke = mat.emissive.map(Vec3::from).filter(|k| k.is_finite() && k.max_element() > 0.0);
                     match ke {
@@ -102,4 +101,81 @@ pub(crate) fn load(path: &Path, materials: Materials) -> Result<Loaded, SceneErr
         }
     }
     Ok(out)
+}
+
+/// The OBJ stream as `tobj` sees it: without normals and texture coordinates (`vn`, `vt`, `vp`
+/// lines become empty, face corners `v/vt/vn` become `v`). They are not used, and `tobj` overflows
+/// on out-of-range normal or texture indices instead of failing. Line numbers are kept.
+struct PositionsOnly<R> {
+    inner: R,
+    line: Vec<u8>,
+    out: Vec<u8>,
+    pos: usize,
+}
+
+impl<R: BufRead> PositionsOnly<R> {
+    fn new(inner: R) -> Self {
+        PositionsOnly { inner, line: Vec::new(), out: Vec::new(), pos: 0 }
+    }
+}
+
+/// Appends `line` to `out` as [`PositionsOnly`] passes it on.
+fn positions_only(line: &[u8], out: &mut Vec<u8>) {
+    let body = line.trim_ascii_start();
+    let keyword_end = body.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(body.len());
+    let newline: &[u8] = if line.ends_with(b"\n") { b"\n" } else { b"" };
+    match &body[..keyword_end] {
+        b"vn" | b"vt" | b"vp" => out.extend_from_slice(newline),
+        b"f" => {
+            out.push(b'f');
+            for corner in body[keyword_end..].split(|b| b.is_ascii_whitespace()).filter(|c| !c.is_empty()) {
+                out.push(b' ');
+                out.extend_from_slice(corner.split(|&b| b == b'/').next().unwrap_or(corner));
+            }
+            out.extend_from_slice(newline);
+        }
+        _ => out.extend_from_slice(line),
+    }
+}
+
+impl<R: BufRead> BufRead for PositionsOnly<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        while self.pos >= self.out.len() {
+            self.line.clear();
+            self.out.clear();
+            self.pos = 0;
+            if self.inner.read_until(b'\n', &mut self.line)? == 0 {
+                break;
+            }
+            positions_only(&self.line, &mut self.out);
+        }
+        Ok(&self.out[self.pos..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.pos = (self.pos + n).min(self.out.len());
+    }
+}
+
+impl<R: BufRead> Read for PositionsOnly<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let avail = self.fill_buf()?;
+        let n = avail.len().min(buf.len());
+        buf[..n].copy_from_slice(&avail[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_and_texture_coordinates_are_left_out() {
+        let text = "v 0 0 0\nvn 0 1 0\n  vt 0.5 0.5\nf 1/1/1 2//-11  3/4\r\nfoo bar\nf 1 2 3";
+        let mut out = String::new();
+        PositionsOnly::new(text.as_bytes()).read_to_string(&mut out).unwrap();
+        assert_eq!(out, "v 0 0 0\n\n\nf 1 2 3\nfoo bar\nf 1 2 3");
+    }
 }

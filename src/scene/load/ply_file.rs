@@ -9,7 +9,7 @@ use crate::scene::Mesh;
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult};
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::path::Path;
 
 const FORMAT: &str = "PLY";
@@ -166,6 +166,14 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
                     if f.bad {
                         return Err(bad(&format!("face {i} has a negative vertex index")));
                     }
+                    if f.idx.len() < 3 {
+                        // Typically a vertex line read as a face: the header's counts are wrong.
+                        return Err(bad(&format!(
+                            "face {i} has {} vertices (a face needs at least 3; does the header's vertex \
+                             count match the data?)",
+                            f.idx.len()
+                        )));
+                    }
                     super::fan(&f.idx, &mut triangles);
                 }
             }
@@ -177,6 +185,31 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
     if !saw_vertex {
         return Err(bad(&"no 'vertex' element"));
     }
+    // Data beyond the last element means the header's counts are lower than the file's contents
+    // (ASCII: anything but white space; binary: any byte).
+    let ascii = header.encoding == ply_rs_bw::ply::Encoding::Ascii;
+    let mut extra = 0u64;
+    let mut buf = [0u8; 1 << 12];
+    let inner = reader.get_mut();
+    loop {
+        let n = inner.read(&mut buf).map_err(|e| SceneError::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        extra += buf[..n].iter().filter(|b| !ascii || !b.is_ascii_whitespace()).count() as u64;
+    }
+    if extra > 0 {
+        let counts: Vec<String> = header.elements.iter().map(|(n, d)| format!("{} {n}", d.count)).collect();
+        return Err(bad(&format!(
+            "the file holds more data than its header declares ({}): {extra} {} left over",
+            counts.join(", "),
+            if ascii { "characters" } else { "bytes" }
+        )));
+    }
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("ply").to_string();
-    Ok(Loaded { meshes: vec![Mesh { name, positions, triangles, albedo: DEFAULT_ALBEDO }], ..Loaded::default() })
+    Ok(Loaded {
+        meshes: vec![Mesh { name, positions, triangles, albedo: DEFAULT_ALBEDO }],
+        files: vec![path.to_path_buf()],
+        ..Loaded::default()
+    })
 }

@@ -1,7 +1,7 @@
 //! The project's own scene file, `NAME.scene.toml` (format 1). Documented in `docs/scene-format.md`.
 
 use super::{extension, load_mesh_file, primitives, CameraSpec, LightSpec, Loaded, MediumSpec, SceneError};
-use crate::params::{Grid, Phase};
+use crate::params::{de, Grid, Phase};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Deserializer};
 use std::path::Path;
@@ -31,7 +31,9 @@ struct MeshEntry {
     file: Option<String>,
     builtin: Option<String>,
     name: Option<String>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     translate: Option<Vec3>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     rotate_deg: Option<Vec3>,
     scale: Option<Splat>,
     albedo: Option<Splat>,
@@ -40,8 +42,11 @@ struct MeshEntry {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraEntry {
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     eye: Option<Vec3>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     target: Option<Vec3>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     up: Option<Vec3>,
     fov_y_deg: Option<f32>,
     near: Option<f32>,
@@ -51,8 +56,17 @@ struct CameraEntry {
 #[derive(Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 enum LightEntry {
-    Point { position: Option<Vec3>, intensity: Option<Splat>, radius: Option<f32> },
-    Directional { direction: Vec3, irradiance: Option<Splat> },
+    Point {
+        #[serde(default, deserialize_with = "de::opt_vec3")]
+        position: Option<Vec3>,
+        intensity: Option<Splat>,
+        radius: Option<f32>,
+    },
+    Directional {
+        #[serde(deserialize_with = "de::vec3")]
+        direction: Vec3,
+        irradiance: Option<Splat>,
+    },
 }
 
 #[derive(Debug, Deserialize)]
@@ -61,30 +75,9 @@ struct MediumEntry {
     scattering: Option<Splat>,
     absorption: Option<Splat>,
     density: Option<f32>,
-    phase: Option<PhaseEntry>,
-}
-
-/// [`Phase`] with unknown fields rejected.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-enum PhaseEntry {
-    Isotropic,
-    HenyeyGreenstein { g: f32 },
-    Schlick { g: f32 },
-    CornetteShanks { g: f32 },
-    Rayleigh,
-}
-
-impl From<PhaseEntry> for Phase {
-    fn from(p: PhaseEntry) -> Phase {
-        match p {
-            PhaseEntry::Isotropic => Phase::Isotropic,
-            PhaseEntry::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
-            PhaseEntry::Schlick { g } => Phase::Schlick { g },
-            PhaseEntry::CornetteShanks { g } => Phase::CornetteShanks { g },
-            PhaseEntry::Rayleigh => Phase::Rayleigh,
-        }
-    }
+    /// Strict: a known type, `g` exactly where the type has one ([`Phase::from_fields`]).
+    #[serde(default, deserialize_with = "de::opt_phase")]
+    phase: Option<Phase>,
 }
 
 /// A number (all three channels) or `[x, y, z]`.
@@ -175,7 +168,7 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
     use rayon::prelude::*;
     let parts: Vec<Result<Loaded, SceneError>> =
         entries.par_iter().enumerate().map(|(i, (line, e))| mesh_entry(path, dir, i, *line, e)).collect();
-    let mut out = Loaded::default();
+    let mut out = Loaded { files: vec![path.to_path_buf()], ..Loaded::default() };
     for part in parts {
         out.merge(part?);
     }
@@ -206,7 +199,7 @@ pub(crate) fn load(path: &Path) -> Result<Loaded, SceneError> {
             scattering: m.scattering.map(|s| s.0),
             absorption: m.absorption.map(|s| s.0),
             density: m.density,
-            phase: m.phase.map(Phase::from),
+            phase: m.phase,
         });
     }
     out.grid = file.grid;
