@@ -74,3 +74,105 @@ pub fn side_camera() -> Camera {
         far: 100.0,
     }
 }
+
+/// A closed UV sphere with centre `c` and radius `r`: `rings` latitude bands of `segments`
+/// quads each, the poles as single shared vertices, every edge shared by exactly two triangles
+/// (albedo 0.5).
+pub fn sphere(name: &str, c: Vec3, r: f32, rings: u32, segments: u32) -> Mesh {
+    let (rings, segments) = (rings.max(2), segments.max(3));
+    let mut positions = vec![c + Vec3::Y * r];
+    for i in 1..rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            positions.push(c + r * Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+        }
+    }
+    positions.push(c - Vec3::Y * r);
+    let bottom = positions.len() as u32 - 1;
+    let at = |ring: u32, j: u32| 1 + (ring - 1) * segments + j % segments;
+    let mut triangles = Vec::new();
+    for j in 0..segments {
+        triangles.push([0, at(1, j + 1), at(1, j)]);
+        triangles.push([bottom, at(rings - 1, j), at(rings - 1, j + 1)]);
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            let (a, b, c2, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            triangles.push([a, b, c2]);
+            triangles.push([a, c2, d]);
+        }
+    }
+    Mesh { name: name.into(), positions, triangles, albedo: Vec3::splat(0.5) }
+}
+
+/// A closed axis-aligned box with centre `c` and half-extent `h` whose faces are each split into
+/// `n x n` quads, with the vertices along shared edges shared (albedo 0.5): many more edges and
+/// vertices for a light ray to slip through than [`cuboid`]'s 12 triangles.
+pub fn tessellated_cuboid(name: &str, c: Vec3, h: Vec3, n: u32) -> Mesh {
+    let n = n.max(1);
+    // Lattice points on the surface of the (n+1)^3 grid, indexed once each.
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |i: u32, j: u32, k: u32| -> u32 {
+        *index.entry((i, j, k)).or_insert_with(|| {
+            let s = |v: u32| v as f32 / n as f32 * 2.0 - 1.0;
+            positions.push(c + h * Vec3::new(s(i), s(j), s(k)));
+            positions.len() as u32 - 1
+        })
+    };
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for side in [0, n] {
+            for a in 0..n {
+                for b in 0..n {
+                    let p = |da: u32, db: u32| {
+                        let mut q = [0u32; 3];
+                        q[axis] = side;
+                        q[(axis + 1) % 3] = a + da;
+                        q[(axis + 2) % 3] = b + db;
+                        (q[0], q[1], q[2])
+                    };
+                    let v: Vec<u32> =
+                        [p(0, 0), p(1, 0), p(1, 1), p(0, 1)].into_iter().map(|(i, j, k)| vertex(i, j, k)).collect();
+                    // Winding does not matter to the shadows; alternate the diagonal so that both
+                    // directions of shared diagonal edges occur.
+                    if (a + b) % 2 == 0 {
+                        triangles.push([v[0], v[1], v[2]]);
+                        triangles.push([v[0], v[2], v[3]]);
+                    } else {
+                        triangles.push([v[0], v[1], v[3]]);
+                        triangles.push([v[1], v[2], v[3]]);
+                    }
+                }
+            }
+        }
+    }
+    Mesh { name: name.into(), positions, triangles, albedo: Vec3::splat(0.5) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    /// Every edge of the closed meshes is shared by exactly two triangles.
+    fn assert_closed(m: &Mesh) {
+        let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &m.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        assert!(edges.values().all(|&c| c == 2), "{}: an edge is not shared by exactly two triangles", m.name);
+    }
+
+    #[test]
+    fn spheres_and_tessellated_boxes_are_closed() {
+        assert_closed(&sphere("s", Vec3::ZERO, 1.0, 7, 11));
+        assert_closed(&tessellated_cuboid("b", Vec3::ZERO, Vec3::splat(0.5), 3));
+        assert_closed(&cuboid("c", Vec3::ZERO, Vec3::splat(0.5), false));
+        assert_eq!(tessellated_cuboid("b", Vec3::ZERO, Vec3::ONE, 3).triangles.len(), 6 * 9 * 2);
+    }
+}
