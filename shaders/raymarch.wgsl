@@ -26,16 +26,7 @@
 //   is near the box's side) and never converge to the reference.
 
 #import common
-
-// Mirrors `struct ShadowFaces` in surface.wgsl (ShadowUniforms in shadow_map.rs; a test checks both).
-struct ShadowFaces {
-    view_proj: array<mat4x4f, 6>,
-    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
-    // z: 1 point / 0 directional.
-    params: vec4f,
-    // Directional: the reference point far on the light's side.
-    origin: vec4f,
-}
+#import shadow_lookup
 
 // RaymarchUniforms in raymarch.rs.
 struct March {
@@ -50,39 +41,15 @@ struct March {
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(5) var<uniform> march: March;
 
-// Cube face of a direction, in the order +x -x +y -y +z -z (as surface.wgsl and shadow_map.rs).
-fn cube_face(d: vec3f) -> u32 {
-    let a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) { return select(1u, 0u, d.x > 0.0); }
-    if (a.y >= a.z) { return select(3u, 2u, d.y > 0.0); }
-    return select(5u, 4u, d.z > 0.0);
-}
-
 // 1 when the light reaches p: one nearest-texel lookup.
 fn lit(p: vec3f) -> f32 {
-    var layer = 0u;
-    var value = 0.0;
-    if (POINT_LIGHT) {
-        let d = p - f.light.xyz;
-        layer = cube_face(d);
-        value = length(d);
-    } else {
-        value = dot(shadow.origin.xyz - p, f.light.xyz);
-    }
-    let clip = shadow.view_proj[layer] * vec4f(p, 1.0);
-    if (clip.w <= 0.0) { return 1.0; }
-    let ndc = clip.xy / clip.w;
-    // Outside the map (which covers every caster but backdrops): lit, as in surface.wgsl.
-    if (any(abs(ndc) > vec2f(1.0))) { return 1.0; }
-    let n = shadow.params.x;
-    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * n;
-    let c = vec2i(clamp(floor(uv), vec2f(0.0), vec2f(n - 1.0)));
-    let stored = textureLoad(shadow_map, c, i32(layer), 0).x;
+    let s = shadow_coords(p);
+    if (!s.inside) { return 1.0; }
     // 1.5 texels of bias (a texel is params.y, per unit of distance for the cube): only samples
     // just behind a surface are affected, and no normal exists in the medium to slope it by.
     var texel = shadow.params.y;
-    if (POINT_LIGHT) { texel *= value; }
-    return select(0.0, 1.0, value <= stored + 1.5 * texel);
+    if (POINT_LIGHT) { texel *= s.value; }
+    return select(0.0, 1.0, s.value <= shadow_stored(s.layer, floor(s.uv)) + 1.5 * texel);
 }
 
 // A well-mixed hash of the pixel (PCG), as a number in [0, 1).

@@ -12,15 +12,7 @@
 // that the surface itself shadows (integrate.wgsl, "own shadow").
 
 #import common
-
-struct ShadowFaces {
-    view_proj: array<mat4x4f, 6>,
-    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
-    // z: 1 point / 0 directional.
-    params: vec4f,
-    // Directional: the reference point far on the light's side.
-    origin: vec4f,
-}
+#import shadow_lookup
 
 @group(0) @binding(0) var<uniform> f: Frame;
 @group(0) @binding(1) var<uniform> shadow: ShadowFaces;
@@ -46,41 +38,17 @@ fn vs_main(@location(0) position: vec3f, @location(1) albedo: vec3f) -> VsOut {
     return o;
 }
 
-// Cube face of a direction, in the order +x -x +y -y +z -z.
-fn cube_face(d: vec3f) -> u32 {
-    let a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) { return select(1u, 0u, d.x > 0.0); }
-    if (a.y >= a.z) { return select(3u, 2u, d.y > 0.0); }
-    return select(5u, 4u, d.z > 0.0);
-}
-
 // Fraction of a 2x2 texel neighbourhood that sees the light.
 fn visibility(p: vec3f, bias: f32) -> f32 {
-    var layer = 0u;
-    var value = 0.0;
-    if (POINT_LIGHT) {
-        let d = p - f.light.xyz;
-        layer = cube_face(d);
-        value = length(d);
-    } else {
-        value = dot(shadow.origin.xyz - p, f.light.xyz);
-    }
-    let clip = shadow.view_proj[layer] * vec4f(p, 1.0);
-    if (clip.w <= 0.0) { return 1.0; }
-    let ndc = clip.xy / clip.w;
-    // The map covers every caster but backdrops (Scene::core_bounds): a point projecting outside
-    // it can only be shadowed by a backdrop, which lies under everything: lit.
-    if (any(abs(ndc) > vec2f(1.0))) { return 1.0; }
-    let n = shadow.params.x;
-    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * n - 0.5;
+    let s = shadow_coords(p);
+    if (!s.inside) { return 1.0; }
+    let uv = s.uv - 0.5;
     let base = floor(uv);
     let fr = uv - base;
     var lit = vec4f(0.0);
     for (var k = 0; k < 4; k++) {
         let o = vec2f(f32(k & 1), f32(k >> 1));
-        let c = vec2i(clamp(base + o, vec2f(0.0), vec2f(n - 1.0)));
-        let stored = textureLoad(shadow_map, c, i32(layer), 0).x;
-        lit[k] = select(0.0, 1.0, value <= stored + bias);
+        lit[k] = select(0.0, 1.0, s.value <= shadow_stored(s.layer, base + o) + bias);
     }
     return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
 }

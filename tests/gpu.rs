@@ -93,7 +93,7 @@ fn timings_cover_every_pass() {
         eprintln!("adapter has no encoder timestamps; timing check skipped");
         return;
     }
-    let names: Vec<&str> = out.timings.iter().map(|t| t.pass).collect();
+    let names: Vec<&str> = out.timings.iter().map(|t| t.pass.label()).collect();
     assert_eq!(
         names,
         ["shadow_map", "surface", "ranges", "cull", "voxelize", "scan", "scatter_table", "integrate", "composite"]

@@ -78,8 +78,21 @@ fn rel_err(a: f64, b: f64) -> f64 {
     }
 }
 
+/// `PROPTEST_RNG_SEED` when set, otherwise a fixed seed.
+fn fixed_seed() -> proptest::test_runner::RngSeed {
+    let seed = std::env::var("PROPTEST_RNG_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0x00e9_1705);
+    proptest::test_runner::RngSeed::Fixed(seed)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 3000, max_global_rejects: 100_000, ..ProptestConfig::default() })]
+    // A fixed seed: the test command must not pass or fail by chance (PROPTEST_RNG_SEED
+    // explores others).
+    #![proptest_config(ProptestConfig {
+        cases: 3000,
+        max_global_rejects: 100_000,
+        rng_seed: fixed_seed(),
+        ..ProptestConfig::default()
+    })]
 
     /// `(1 - exp(-x)) / x` against `-expm1(-x) / x`: the 7-term series below 0.5 truncates at
     /// x^7 / 8! < 2.5e-7 relative; above it `1 - exp(-x)` is exact (Sterbenz) up to exp's own
@@ -195,8 +208,8 @@ proptest! {
                                                    soft in prop_oneof![Just(0.0), 0.05f64..2.0]) {
         let p = match kind { 0 => Phase::HenyeyGreenstein { g }, 1 => Phase::CornetteShanks { g }, _ => Phase::Rayleigh };
         // A soft light's core spans h / r = sin(gamma) / soft in psi at the row's ends: resolved
-        // when that is at least 8 columns (0.05 rad).
-        prop_assume!(soft == 0.0 || gamma.sin() / soft >= 0.05);
+        // when that is at least 16 columns (0.1 rad).
+        prop_assume!(soft == 0.0 || gamma.sin() / soft >= 0.1);
         let sigma = optical / dist;
         let radius = soft * dist;
         let row = f64m::table_row(gamma, dist, sigma, radius, p.id(), p.g() as f64, TABLE_COLS);

@@ -10,7 +10,7 @@ mod common;
 
 use common::*;
 use epivox::params::{Grid, Light, Medium};
-use epivox::render::{Method, Renderer};
+use epivox::render::{Method, Pass, Renderer};
 use epivox::scene::Scene;
 use glam::Vec3;
 
@@ -77,7 +77,7 @@ fn no_medium_runs_no_voxel_pass() {
     let mut s = base(point_light(Vec3::new(0.2, 3.0, 0.1)));
     s.medium = Medium { scattering: Vec3::ZERO, absorption: Vec3::splat(0.01), ..Medium::default() };
     let out = r.render(&s, 32, 32, Method::Vsv).unwrap();
-    for pass in ["ranges", "cull", "voxelize", "scan", "scatter_table"] {
+    for pass in [Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan, Pass::ScatterTable] {
         assert!(!out.passes.contains(&pass), "{pass} ran without a medium: {:?}", out.passes);
     }
     assert!(out.scatter.pixels.iter().all(|p| *p == [0.0; 3]));

@@ -102,7 +102,7 @@ fn timings_name_the_raymarch_pass_and_shadow_map_size_is_a_setting() {
     assert_eq!(r.shadow_map_size(), 512);
     let small = r.render(&scene, 32, 32, Method::Raymarch { steps: 64, jitter: false }).unwrap();
     if r.ctx.timestamps {
-        let names: Vec<&str> = small.timings.iter().map(|t| t.pass).collect();
+        let names: Vec<&str> = small.timings.iter().map(|t| t.pass.label()).collect();
         assert_eq!(names, ["shadow_map", "surface", "raymarch", "composite"]);
     }
     // Too large for the adapter: refused with the limit, and the old map keeps working.

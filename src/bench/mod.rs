@@ -29,6 +29,7 @@ use crate::metrics::{self, ErrorStats, MetricsError};
 use crate::params::Grid;
 use crate::reference::ReferenceOptions;
 use crate::render::{FrameSetup, Method, Renderer};
+use crate::render::{Pass, RenderError};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -39,6 +40,8 @@ use std::time::Instant;
 pub enum BenchError {
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
     #[error(transparent)]
     Image(#[from] ImageError),
     #[error("comparing against the reference: {0}")]
@@ -154,7 +157,7 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
             Point::march(64, 512, false),
         ];
     }
-    let map = Renderer::SHADOW_MAP_SIZE;
+    let map = crate::params::Baseline::default().shadow_map;
     let mut v = Vec::new();
     for bins in [32, 64, 128, 256, 512, 1024] {
         v.push(Point::grid(Vsv, 512, 512, bins, map));
@@ -182,8 +185,8 @@ pub fn scaling_points(quick: bool) -> [Point; 2] {
         [Point::grid(Method::Vsv, 64, 64, 32, 512), Point::march(32, 256, false)]
     } else {
         [
-            Point::grid(Method::Vsv, 1024, 1024, 256, Renderer::SHADOW_MAP_SIZE),
-            Point::march(256, Renderer::SHADOW_MAP_SIZE, false),
+            Point::grid(Method::Vsv, 1024, 1024, 256, crate::params::Baseline::default().shadow_map),
+            Point::march(256, crate::params::Baseline::default().shadow_map, false),
         ]
     }
 }
@@ -207,7 +210,7 @@ pub fn resolution_sweep(quick: bool) -> Vec<u32> {
 }
 
 /// Passes every method runs; the rest are the method's own ("volume" time).
-pub const SHARED_PASSES: [&str; 3] = ["shadow_map", "surface", "composite"];
+pub const SHARED_PASSES: [Pass; 3] = [Pass::ShadowMap, Pass::Surface, Pass::Composite];
 
 /// Median times of one point.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,8 +219,8 @@ pub struct Timing {
     pub total_ms: f64,
     /// Median of the per-frame sums of the method's own passes (not in [`SHARED_PASSES`]).
     pub volume_ms: f64,
-    /// Median per pass, in pass order.
-    pub passes: Vec<(&'static str, f64)>,
+    /// Median per pass, in pass order (empty without GPU timestamps: then the totals are wall clock).
+    pub passes: Vec<(Pass, f64)>,
     pub frames: usize,
 }
 
@@ -276,36 +279,37 @@ fn measure(
     point: &Point,
     warmup: usize,
     frames: usize,
-) -> Result<(Timing, crate::render::RenderOutput), GpuError> {
+) -> Result<(Timing, crate::render::RenderOutput), RenderError> {
     r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
     scene.grid = point.grid;
     for _ in 0..warmup {
         r.render(scene, width, height, point.method)?;
     }
     let frames = frames.max(1);
-    let mut per_frame: Vec<Vec<(&'static str, f64)>> = Vec::with_capacity(frames);
+    let mut per_frame: Vec<Vec<(Pass, f64)>> = Vec::with_capacity(frames);
+    let mut wall: Vec<f64> = Vec::with_capacity(frames);
     let mut last = None;
     for _ in 0..frames {
         let started = Instant::now();
         let out = r.render(scene, width, height, point.method)?;
-        let t = if out.timings.is_empty() {
-            vec![("frame (wall clock)", started.elapsed().as_secs_f64() * 1e3)]
-        } else {
-            out.timings.iter().map(|t| (t.pass, t.ms)).collect()
-        };
-        per_frame.push(t);
+        wall.push(started.elapsed().as_secs_f64() * 1e3);
+        per_frame.push(out.timings.iter().map(|t| (t.pass, t.ms)).collect());
         last = Some(out);
     }
     let Some(last) = last else { unreachable!("frames >= 1") };
+    if !r.ctx.timestamps {
+        let total = median(wall);
+        return Ok((Timing { total_ms: total, volume_ms: f64::NAN, passes: Vec::new(), frames }, last));
+    }
     let total = median(per_frame.iter().map(|f| f.iter().map(|p| p.1).sum()).collect());
     let volume = median(
         per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
     );
     let passes = per_frame[0]
         .iter()
-        .map(|&(name, _)| {
-            let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == name).map(|p| p.1)).collect();
-            (name, median(v))
+        .map(|&(pass, _)| {
+            let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == pass).map(|p| p.1)).collect();
+            (pass, median(v))
         })
         .collect();
     Ok((Timing { total_ms: total, volume_ms: volume, passes, frames }, last))

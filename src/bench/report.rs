@@ -2,12 +2,9 @@
 
 use super::plot::{self, Plot, Series, COLORS};
 use super::{pareto_front, time_at_error, BenchError, BenchResults, CacheStatus, Row, ScalingRow};
+use crate::render::Pass;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-/// Pass columns, in frame order; any other pass a row has is appended after these.
-const PASS_ORDER: [&str; 9] =
-    ["shadow_map", "surface", "ranges", "voxelize", "scan", "scatter_table", "integrate", "raymarch", "composite"];
 
 fn write(path: &Path, text: &str) -> Result<(), BenchError> {
     crate::fsx::write_bytes_atomic(path, text.as_bytes()).map_err(|source| BenchError::Io {
@@ -37,21 +34,21 @@ fn num(v: f64) -> String {
     }
 }
 
-fn pass_columns<'a>(timings: impl Iterator<Item = &'a super::Timing>) -> Vec<&'static str> {
-    let mut cols: Vec<&'static str> = Vec::new();
+/// The passes any of `timings` ran, in frame order.
+fn pass_columns<'a>(timings: impl Iterator<Item = &'a super::Timing>) -> Vec<Pass> {
+    let mut cols: Vec<Pass> = Vec::new();
     for t in timings {
         for (p, _) in &t.passes {
             if !cols.contains(p) {
-                cols.push(p);
+                cols.push(*p);
             }
         }
     }
-    let rank = |p: &str| PASS_ORDER.iter().position(|q| *q == p).unwrap_or(PASS_ORDER.len());
-    cols.sort_by_key(|p| rank(p));
+    cols.sort();
     cols
 }
 
-fn pass_ms(t: &super::Timing, pass: &str) -> String {
+fn pass_ms(t: &super::Timing, pass: Pass) -> String {
     t.passes.iter().find(|p| p.0 == pass).map(|p| num(p.1)).unwrap_or_default()
 }
 
@@ -77,7 +74,7 @@ pub fn results_csv(r: &BenchResults) -> String {
             num(row.scatter.psnr)
         );
         for c in &cols {
-            let _ = write!(s, ",{}", pass_ms(&row.timing, c));
+            let _ = write!(s, ",{}", pass_ms(&row.timing, *c));
         }
         let _ = writeln!(
             s,
@@ -111,7 +108,7 @@ fn scaling_csv(rows: &[ScalingRow]) -> String {
             num(row.timing.total_ms)
         );
         for c in &cols {
-            let _ = write!(s, ",{}", pass_ms(&row.timing, c));
+            let _ = write!(s, ",{}", pass_ms(&row.timing, *c));
         }
         let _ = writeln!(s, ",{},{}", num(row.timing.volume_ms), row.timing.frames);
     }
@@ -478,10 +475,10 @@ pub fn markdown(r: &BenchResults) -> String {
 
 /// The paper's stage timings (Section 5, GTX 480, 1024x1024 image, 1024x1024 x 256 grid), beside
 /// ours at the same grid when the sweep has that point.
-pub const PAPER_STAGES_MS: [(&str, &str, f64, f64); 3] = [
-    ("voxelize", "voxelize", 0.5, 2.5),
-    ("scan", "scan (256 bins = 2 x 0.65 ms per 128 bins)", 1.3, 1.3),
-    ("integrate", "integrate", 1.0, 1.0),
+pub const PAPER_STAGES_MS: [(Pass, &str, f64, f64); 3] = [
+    (Pass::Voxelize, "voxelize", 0.5, 2.5),
+    (Pass::Scan, "scan (256 bins = 2 x 0.65 ms per 128 bins)", 1.3, 1.3),
+    (Pass::Integrate, "integrate", 1.0, 1.0),
 ];
 
 fn paper_section(s: &mut String, r: &BenchResults) {

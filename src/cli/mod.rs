@@ -445,7 +445,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
         if args.method == Method::Raymarch {
             j["steps"] = serde_json::json!(steps);
             j["jitter"] = serde_json::json!(args.jitter);
-            j["shadow_map"] = serde_json::json!(args.shadow_map.unwrap_or(Renderer::SHADOW_MAP_SIZE));
+            j["shadow_map"] =
+                serde_json::json!(args.shadow_map.unwrap_or(epivox::params::Baseline::default().shadow_map));
         }
         println!("{}", serde_json::to_string_pretty(&j)?);
     } else {
@@ -499,7 +500,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
                     p.triangles_total,
                     p.triangles.culled_view,
                     p.triangles.culled_depth,
-                    p.passes.join(" > "),
+                    p.passes.iter().map(|p| p.label()).collect::<Vec<_>>().join(" > "),
                     p.variant
                 );
             }

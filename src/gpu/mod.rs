@@ -4,15 +4,15 @@
 mod shaders;
 mod timing;
 
-pub use shaders::{ShaderError, ShaderLibrary, ShaderSource, EMBEDDED};
+pub use shaders::{ShaderError, ShaderLibrary, ShaderSource, EMBEDDED, IMPORTED_ONLY};
 
 /// The shaders compiled into the binary, as (file name, text).
 pub fn shaders_embedded() -> &'static [(&'static str, &'static str)] {
     EMBEDDED
 }
-pub use timing::{GpuTimer, PassTiming};
+pub use timing::GpuTimer;
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Errors of the GPU path. Every message says what to do or what was wrong.
 #[derive(Debug, thiserror::Error)]
@@ -30,8 +30,6 @@ pub enum GpuError {
     Shader(#[from] ShaderError),
     #[error("GPU validation error while {during}: {message}")]
     Validation { during: String, message: String },
-    #[error(transparent)]
-    Frame(#[from] crate::render::FrameError),
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
 }
@@ -45,6 +43,9 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Encoder-level timestamps are available (see [`GpuTimer`]).
     pub timestamps: bool,
+    /// wgpu errors that no error scope caught, kept here instead of panicking (wgpu's default);
+    /// [`GpuContext::take_uncaptured`] turns them into a [`GpuError`].
+    uncaptured: Arc<Mutex<Vec<String>>>,
 }
 
 impl GpuContext {
@@ -79,20 +80,54 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device { adapter: info.name.clone(), message: e.to_string() })?;
-        Ok(GpuContext {
-            adapter: Arc::new(adapter),
-            device,
-            queue,
-            timestamps: features.contains(Self::OPTIONAL_FEATURES),
-            info,
-        })
+        let timestamps = features.contains(Self::OPTIONAL_FEATURES);
+        Ok(Self::wrap(adapter, device, queue, info, timestamps))
     }
 
     /// Wraps a device someone else opened (the editor's eframe window).
     pub fn from_parts(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> GpuContext {
         let info = adapter.get_info();
         let timestamps = device.features().contains(Self::OPTIONAL_FEATURES);
-        GpuContext { adapter: Arc::new(adapter), device, queue, info, timestamps }
+        Self::wrap(adapter, device, queue, info, timestamps)
+    }
+
+    fn wrap(
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        info: wgpu::AdapterInfo,
+        timestamps: bool,
+    ) -> GpuContext {
+        // wgpu panics on an error no scope catches; keep it instead, so that a command or an edit
+        // that provokes one gets an error that says so and the program goes on.
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        GpuContext { adapter: Arc::new(adapter), device, queue, info, timestamps, uncaptured }
+    }
+
+    /// The wgpu errors that no scope caught since the last call, as one error (`None` when there
+    /// were none). `during` says what was going on, for the message.
+    pub fn take_uncaptured(&self, during: &str) -> Result<(), GpuError> {
+        let errors = match self.uncaptured.lock() {
+            Ok(mut v) => std::mem::take(&mut *v),
+            Err(_) => return Ok(()),
+        };
+        match errors.first() {
+            None => Ok(()),
+            Some(first) => Err(GpuError::Validation {
+                during: during.to_string(),
+                message: if errors.len() > 1 {
+                    format!("{first} (and {} more)", errors.len() - 1)
+                } else {
+                    first.clone()
+                },
+            }),
+        }
     }
 
     /// Adapter name and backend, for reports.
@@ -110,7 +145,7 @@ impl GpuContext {
                 needed: bytes,
                 limit,
                 adapter: self.info.name.clone(),
-                hint: " bytes; use fewer planes, rays or bins (--grid)".into(),
+                hint: " bytes; use fewer planes, rays or bins".into(),
             });
         }
         Ok(())

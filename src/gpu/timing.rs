@@ -3,27 +3,22 @@
 //! Pass-level timestamp writes are wrong on Mesa 22 (llvmpipe); encoder-level ones are right there
 //! and everywhere else, so that is the only kind we use.
 
-/// One pass's GPU time.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct PassTiming {
-    pub pass: &'static str,
-    pub ms: f64,
-}
-
-/// Collects timestamps for one frame: `begin`, then `mark(pass)` after each pass.
-pub struct GpuTimer {
+/// Collects timestamps for one frame: `begin`, then `mark(label)` after each pass; `L` names the
+/// passes (the renderer's `Pass`).
+pub struct GpuTimer<L> {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
     capacity: u32,
-    labels: Vec<&'static str>,
+    /// The label of each timestamp after the first.
+    labels: Vec<L>,
     period_ns: f32,
 }
 
-impl GpuTimer {
+impl<L: Copy> GpuTimer<L> {
     pub const CAPACITY: u32 = 32;
 
     /// `None` when the device has no encoder timestamps.
-    pub fn new(ctx: &super::GpuContext) -> Option<GpuTimer> {
+    pub fn new(ctx: &super::GpuContext) -> Option<GpuTimer<L>> {
         if !ctx.timestamps {
             return None;
         }
@@ -50,37 +45,35 @@ impl GpuTimer {
     /// Starts a frame.
     pub fn begin(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.labels.clear();
-        self.labels.push("begin");
         encoder.write_timestamp(&self.set, 0);
     }
 
-    /// Marks the end of `pass` (and the start of the next).
-    pub fn mark(&mut self, encoder: &mut wgpu::CommandEncoder, pass: &'static str) {
-        let i = self.labels.len() as u32;
+    /// Marks the end of the pass `label` (and the start of the next).
+    pub fn mark(&mut self, encoder: &mut wgpu::CommandEncoder, label: L) {
+        let i = self.labels.len() as u32 + 1;
         if i < self.capacity {
             encoder.write_timestamp(&self.set, i);
-            self.labels.push(pass);
+            self.labels.push(label);
         }
     }
 
     /// Resolves the queries into the readback buffer; call before `finish`.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        let n = self.labels.len() as u32;
-        if n > 0 {
-            encoder.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
-        }
+        let n = self.labels.len() as u32 + 1;
+        encoder.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
     }
 
-    /// Reads the times back (blocking) after the frame's submission.
-    pub fn read(&self, ctx: &super::GpuContext) -> Result<Vec<PassTiming>, super::GpuError> {
+    /// Reads the times back (blocking) after the frame's submission: each label with the
+    /// milliseconds since the previous mark.
+    pub fn read(&self, ctx: &super::GpuContext) -> Result<Vec<(L, f64)>, super::GpuError> {
         let bytes = ctx.read_buffer(&self.resolve)?;
         let stamps: &[u64] = bytemuck::cast_slice(&bytes);
         let mut out = Vec::new();
-        for i in 1..self.labels.len() {
-            let dt = stamps[i].wrapping_sub(stamps[i - 1]);
+        for (i, label) in self.labels.iter().enumerate() {
+            let (a, b) = (stamps[i], stamps[i + 1]);
             // A counter that went backwards is a driver bug; report 0 rather than 584 years.
-            let ms = if stamps[i] >= stamps[i - 1] { dt as f64 * self.period_ns as f64 * 1e-6 } else { 0.0 };
-            out.push(PassTiming { pass: self.labels[i], ms });
+            let ms = if b >= a { (b - a) as f64 * self.period_ns as f64 * 1e-6 } else { 0.0 };
+            out.push((*label, ms));
         }
         Ok(out)
     }

@@ -1,13 +1,29 @@
-//! Composite: `L_pixel = L_surface * T_view + L_scatter` in linear radiance
-//! (`shaders/composite.wgsl`); tone mapping for display happens when the image is written.
+//! Composite: the final linear radiance of each pixel (`shaders/composite.wgsl`):
+//!
+//!   L_pixel = L_surface * T_view + L_scatter,   T_view = exp(-sigma_t * (the view path's length in the medium))
+//!
+//! (the medium is unbounded for a point light and fills the scene's box for a directional one; tone
+//! mapping for display happens when the image is written).
 
-use super::util::{storage_texture_entry, texture_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+bindings! {
+    /// Composite's bind group (composite.wgsl).
+    CompositeBindings {
+        f: Kind::Uniform,
+        surface: Kind::Texture,
+        distance: Kind::Texture,
+        scatter: Kind::Texture,
+        hdr: Kind::StorageTexture(Composite::OUTPUT),
+    }
+}
+
 pub struct Composite {
     pipelines: SpecialisedCompute<1>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Composite {
@@ -15,21 +31,9 @@ impl Composite {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Composite, GpuError> {
         let module = lib.module(device, "composite.wgsl")?;
-        let d2 = wgpu::TextureViewDimension::D2;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Composite::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                texture_entry(1, wgpu::ShaderStages::COMPUTE, d2),
-                texture_entry(2, wgpu::ShaderStages::COMPUTE, d2),
-                texture_entry(3, wgpu::ShaderStages::COMPUTE, d2),
-                storage_texture_entry(4, Self::OUTPUT),
-            ],
-        });
-        Ok(Composite {
-            pipelines: SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light),
-            layout,
-        })
+        let layout = CompositeBindings::layout(device, "Composite::layout", wgpu::ShaderStages::COMPUTE);
+        let pipelines = SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light);
+        Ok(Composite { pipelines, layout, bind_group: None })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -37,22 +41,18 @@ impl Composite {
         self.pipelines.prepare(device, variant);
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        variant: Variant,
-        bind_group: &wgpu::BindGroup,
-        width: u32,
-        height: u32,
-    ) {
+    /// (Re)binds the inputs; called when the targets change.
+    pub fn bind(&mut self, device: &wgpu::Device, b: CompositeBindings) {
+        self.bind_group = Some(b.bind(device, "Composite::bind_group", &self.layout));
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, width: u32, height: u32) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([pipeline]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("Composite::pass"),
             timestamp_writes: None,
         });
-        // Renderer::render_frame prepares every variant it records.
-        let Some([pipeline]) = self.pipelines.get(variant) else {
-            return;
-        };
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);

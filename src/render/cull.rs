@@ -8,9 +8,22 @@
 //! thread through an indirect dispatch. Scan's indirect dispatch is empty when nothing is kept, so
 //! an empty frame costs nothing.
 
-use super::util::{storage_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
+
+bindings! {
+    /// Cull's bind group for one chunk of triangles (cull.wgsl).
+    CullBindings {
+        f: Kind::Uniform,
+        tris: Kind::Storage,
+        records: Kind::StorageRw,
+        offsets: Kind::StorageRw,
+        blocks: Kind::StorageRw,
+        counters: Kind::StorageRw,
+        dispatch: Kind::StorageRw,
+    }
+}
 
 /// What the last cull found (read back on demand).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -59,7 +72,9 @@ impl CullLists {
 
 pub struct Cull {
     pipelines: SpecialisedCompute<4>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    /// One per chunk of triangles, with the chunk's triangle count.
+    bind_groups: Vec<(wgpu::BindGroup, u32)>,
     /// `[kept (chunk), culled by depth, culled by view, items (chunk), kept (all), items (all),
     /// overflowed lists, unused]`.
     pub counters: wgpu::Buffer,
@@ -76,19 +91,7 @@ impl Cull {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Cull, GpuError> {
         let module = lib.module(device, "cull.wgsl")?;
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Cull::layout"),
-            entries: &[
-                uniform_entry(0, c),
-                storage_entry(1, c, true),  // triangles (this chunk)
-                storage_entry(2, c, false), // records
-                storage_entry(3, c, false), // offsets
-                storage_entry(4, c, false), // blocks
-                storage_entry(5, c, false), // counters
-                storage_entry(6, c, false), // dispatch arguments
-            ],
-        });
+        let layout = CullBindings::layout(device, "Cull::layout", wgpu::ShaderStages::COMPUTE);
         let buffer = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -110,6 +113,7 @@ impl Cull {
                 Specialised::Light,
             ),
             layout,
+            bind_groups: Vec::new(),
             counters: buffer("Cull::counters", 32, wgpu::BufferUsages::empty()),
             dispatch: buffer("Cull::dispatch", 48, wgpu::BufferUsages::INDIRECT),
         })
@@ -120,24 +124,49 @@ impl Cull {
         self.pipelines.prepare(device, variant);
     }
 
+    /// (Re)binds the scene's chunks of triangles and lists; called when the scene changes.
+    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &super::SceneGpu) {
+        let l = &geometry.lists;
+        self.bind_groups = geometry
+            .chunks
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .enumerate()
+            .map(|(i, (tris, n))| {
+                let b = CullBindings {
+                    f: frame.as_entire_binding(),
+                    tris: tris.as_entire_binding(),
+                    records: l.records.as_entire_binding(),
+                    offsets: l.offsets.as_entire_binding(),
+                    blocks: l.blocks.as_entire_binding(),
+                    counters: self.counters.as_entire_binding(),
+                    dispatch: self.dispatch.as_entire_binding(),
+                };
+                (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), *n)
+            })
+            .collect();
+    }
+
+    /// The chunks of triangles bound (one unless the scene is larger than a storage binding).
+    pub fn chunks(&self) -> usize {
+        self.bind_groups.len()
+    }
+
     /// Clears the frame's totals; call once per frame before the first chunk.
     pub fn begin_frame(&self, encoder: &mut wgpu::CommandEncoder) {
         encoder.clear_buffer(&self.counters, 0, None);
         encoder.clear_buffer(&self.dispatch, 0, None);
     }
 
-    /// Culls one chunk of `triangles` triangles (bound in `bind_group`) and builds its work list.
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        variant: Variant,
-        bind_group: &wgpu::BindGroup,
-        triangles: u32,
-    ) {
-        // Renderer::render_frame prepares every variant it records.
-        let Some([cull, finish, local, blocks]) = self.pipelines.get(variant) else {
+    /// Culls chunk `chunk` of the scene's triangles and builds its work list.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, chunk: usize) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([cull, finish, local, blocks]), Some((bind_group, triangles))) =
+            (self.pipelines.get(variant), self.bind_groups.get(chunk))
+        else {
             return;
         };
+        let triangles = *triangles;
         // This chunk's kept count and items (the frame's totals accumulate in the other counters).
         encoder.clear_buffer(&self.counters, 0, Some(4));
         encoder.clear_buffer(&self.counters, 12, Some(4));

@@ -1,15 +1,32 @@
-//! Integrate: per-pixel single scattering over the lit runs of the shadow volume
-//! (`shaders/integrate.wgsl`). Point light: `sigma_s I0 / h (G(psi_s) - sum_runs dG)` with the
-//! scatter table; directional light: the closed-form integral of `exp(-sigma_t (l + m))` over
-//! piecewise-linear path lengths. Bilinear over the four grid rays around the pixel.
+//! Integrate: per-pixel single scattering over the lit stretches of the shadow volume
+//! (`shaders/integrate.wgsl`):
+//!
+//!   L_scatter = sum_j C(z_j) (q_{j-1} - q_j),   C(z) = U(clamp(z, z_start, z_end))
+//!
+//! with U the cumulative unshadowed in-scattering along the view ray (point light: the scatter
+//! table, `sigma_s I0 / h G`; directional: closed-form pieces of `exp(-sigma_t (l + m))`) and `q_j`
+//! bin j's lit fraction blended over the four grid rays around the pixel. Only the bins where `q`
+//! changes are visited.
 
-use super::util::{storage_entry, storage_texture_entry, texture_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+bindings! {
+    /// Integrate's bind group (integrate.wgsl).
+    IntegrateBindings {
+        f: Kind::Uniform,
+        grid: Kind::Storage,
+        table: Kind::Storage,
+        distance: Kind::Texture,
+        scatter_out: Kind::StorageTexture(Integrate::OUTPUT),
+    }
+}
+
 pub struct Integrate {
     pipelines: SpecialisedCompute<1>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Integrate {
@@ -17,27 +34,10 @@ impl Integrate {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Integrate, GpuError> {
         let module = lib.module(device, "integrate.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Integrate::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
-                storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
-                texture_entry(3, wgpu::ShaderStages::COMPUTE, wgpu::TextureViewDimension::D2),
-                storage_texture_entry(4, Self::OUTPUT),
-            ],
-        });
-        Ok(Integrate {
-            pipelines: SpecialisedCompute::new(
-                device,
-                "Integrate",
-                module,
-                &layout,
-                ["main"],
-                Specialised::LightAndPhase,
-            ),
-            layout,
-        })
+        let layout = IntegrateBindings::layout(device, "Integrate::layout", wgpu::ShaderStages::COMPUTE);
+        let pipelines =
+            SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightAndPhase);
+        Ok(Integrate { pipelines, layout, bind_group: None })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -45,22 +45,18 @@ impl Integrate {
         self.pipelines.prepare(device, variant);
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        variant: Variant,
-        bind_group: &wgpu::BindGroup,
-        width: u32,
-        height: u32,
-    ) {
+    /// (Re)binds the inputs; called when the targets or the grid change.
+    pub fn bind(&mut self, device: &wgpu::Device, b: IntegrateBindings) {
+        self.bind_group = Some(b.bind(device, "Integrate::bind_group", &self.layout));
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, width: u32, height: u32) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([pipeline]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("Integrate::pass"),
             timestamp_writes: None,
         });
-        // Renderer::render_frame prepares every variant it records.
-        let Some([pipeline]) = self.pipelines.get(variant) else {
-            return;
-        };
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);

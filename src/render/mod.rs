@@ -1,14 +1,21 @@
-//! The GPU renderer: one struct per pass, and [`Renderer::render`], the ordered list of pass calls.
+//! The GPU renderer: one struct per pass, each owning its pipelines, layout and bind groups, and
+//! [`Renderer::render_frame`], the frame as the ordered list of pass calls:
 //!
 //! ```text
-//! ShadowMap -> Surface -> Voxelize -> Scan -> ScatterTable (point light) -> Integrate -> Composite
-//! ShadowMap -> Surface -> Raymarch -> Composite                      (Method::Raymarch, the baseline)
+//! ShadowMap -> Surface -> Ranges -> (Cull -> Voxelize per chunk of triangles) -> Scan
+//!           -> ScatterTable (point light) -> Integrate -> Composite                     (VSV, Cartesian)
+//! ShadowMap -> Surface -> Raymarch -> Composite                                          (the baseline)
 //! ```
+//!
+//! Resources (targets, grid, geometry, shadow map) are created when their inputs change, and every
+//! pass's bind groups with them ([`Renderer::rebind`]): a frame of an unchanged scene, size and
+//! grid creates nothing.
 
 mod composite;
 mod cull;
 mod frame;
 mod integrate;
+mod pass;
 mod ranges;
 mod raymarch;
 mod scan;
@@ -16,30 +23,40 @@ mod scatter_table;
 mod scene_gpu;
 mod shadow_map;
 mod surface;
-mod util;
+pub(crate) mod util;
 mod variant;
 mod voxelize;
 
-pub use composite::Composite;
-pub use cull::{Cull, CullCounts};
+pub use composite::{Composite, CompositeBindings};
+pub use cull::{Cull, CullBindings, CullCounts, CullLists};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
-pub use integrate::Integrate;
-pub use ranges::Ranges;
-pub use raymarch::{Raymarch, RaymarchUniforms};
-pub use scan::Scan;
-pub use scatter_table::ScatterTable;
+pub use integrate::{Integrate, IntegrateBindings};
+pub use pass::{Pass, PassTiming};
+pub use ranges::{Ranges, RangesBindings};
+pub use raymarch::{Raymarch, RaymarchBindings, RaymarchUniforms};
+pub use scan::{Scan, ScanBindings};
+pub use scatter_table::{ScatterTable, ScatterTableBindings};
 pub use scene_gpu::SceneGpu;
-pub use shadow_map::{FaceUniforms, ShadowMap, ShadowUniforms};
-pub use surface::Surface;
+pub use shadow_map::{FaceUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms};
+pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
-pub use voxelize::Voxelize;
+pub use voxelize::{Voxelize, VoxelizeBindings};
 
-use crate::gpu::{GpuContext, GpuError, GpuTimer, PassTiming, ShaderLibrary};
+use crate::gpu::{GpuContext, GpuError, GpuTimer, ShaderLibrary};
 use crate::image::Image;
-use crate::params::Grid;
+use crate::params::{Baseline, Grid};
 use crate::scene::Scene;
 use util::texture_2d;
 use wgpu::util::DeviceExt;
+
+/// Why a frame could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+}
 
 /// What one frame produced.
 #[derive(Debug, Clone)]
@@ -53,7 +70,7 @@ pub struct RenderOutput {
     /// The frame's fitted grid ranges.
     pub setup: FrameSetup,
     /// The passes that ran, in order.
-    pub passes: Vec<&'static str>,
+    pub passes: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
 }
@@ -64,7 +81,7 @@ pub struct FrameInfo {
     pub timings: Vec<PassTiming>,
     pub setup: FrameSetup,
     /// The passes that ran, in order (also without timestamps).
-    pub passes: Vec<&'static str>,
+    pub passes: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
 }
@@ -84,10 +101,10 @@ pub struct PruneReport {
     /// 32-bit words per ray (the bins' precision is spent on `bins_z`).
     pub words_per_ray: u32,
     pub triangles_total: u32,
-    /// Kept and dropped triangles (zero when no voxel pass ran).
+    /// Kept and dropped triangles, and Voxelize's work items (zero when no voxel pass ran).
     pub triangles: CullCounts,
     /// The passes that ran.
-    pub passes: Vec<&'static str>,
+    pub passes: Vec<Pass>,
     /// The shader variant they ran as (`point light, henyey-greenstein`): the light type and phase
     /// function are compiled into the pipelines rather than branched on per pixel.
     pub variant: String,
@@ -122,24 +139,18 @@ struct Targets {
     hdr_view: wgpu::TextureView,
 }
 
-/// Grid-dependent resources.
-struct GridResources {
-    grid: Grid,
-    bits: wgpu::Buffer,
-}
-
 /// Every pass, created together so that a reload either replaces all of them or none.
 struct Passes {
     shadow_map: ShadowMap,
     surface: Surface,
+    ranges: Ranges,
+    cull: Cull,
     voxelize: Voxelize,
     scan: Scan,
     scatter_table: ScatterTable,
     integrate: Integrate,
-    composite: Composite,
     raymarch: Raymarch,
-    ranges: Ranges,
-    cull: Cull,
+    composite: Composite,
 }
 
 impl Passes {
@@ -149,14 +160,14 @@ impl Passes {
             Ok(Passes {
                 shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 surface: Surface::new(d, lib)?,
+                ranges: Ranges::new(d, lib)?,
+                cull: Cull::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib)?,
                 scan: Scan::new(d, lib)?,
                 scatter_table: ScatterTable::new(d, lib)?,
                 integrate: Integrate::new(d, lib)?,
-                composite: Composite::new(d, lib)?,
                 raymarch: Raymarch::new(d, lib)?,
-                ranges: Ranges::new(d, lib)?,
-                cull: Cull::new(d, lib)?,
+                composite: Composite::new(d, lib)?,
             })
         })?
     }
@@ -174,9 +185,32 @@ impl Passes {
             self.voxelize.prepare(d, variant);
             self.scatter_table.prepare(d, variant);
             self.integrate.prepare(d, variant);
-            self.composite.prepare(d, variant);
             self.raymarch.prepare(d, variant);
+            self.composite.prepare(d, variant);
         })
+    }
+}
+
+/// The scene's geometry on the GPU and the fingerprint of the meshes it was uploaded from.
+struct Geometry {
+    gpu: SceneGpu,
+    fingerprint: u64,
+}
+
+/// The frame being recorded: its encoder, the passes that ran and their timestamps.
+struct FrameRecorder<'a> {
+    enc: wgpu::CommandEncoder,
+    timer: Option<&'a mut GpuTimer<Pass>>,
+    ran: Vec<Pass>,
+}
+
+impl FrameRecorder<'_> {
+    /// Marks the end of `pass`.
+    fn mark(&mut self, pass: Pass) {
+        self.ran.push(pass);
+        if let Some(t) = self.timer.as_deref_mut() {
+            t.mark(&mut self.enc, pass);
+        }
     }
 }
 
@@ -190,11 +224,10 @@ pub struct Renderer {
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
     shadow_uniforms: wgpu::Buffer,
-    table: wgpu::Buffer,
-    timer: Option<GpuTimer>,
-    geometry: Option<(SceneGpu, usize)>,
+    timer: Option<GpuTimer<Pass>>,
+    geometry: Option<Geometry>,
     targets: Option<Targets>,
-    grid: Option<GridResources>,
+    grid: Option<(Grid, wgpu::Buffer)>,
     /// A copy of the grid taken between voxelize and scan (the geometry voxels), kept only while
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
@@ -202,34 +235,25 @@ pub struct Renderer {
     /// The variant of the last frame: every pass holds its pipelines (a reload or a new shadow map
     /// builds them before replacing the old ones), so frames of the same variant build nothing.
     variant: Option<Variant>,
+    /// A resource or the passes changed since the bind groups were made.
+    stale_bindings: bool,
 }
 
 impl Renderer {
-    /// Shadow-map texels per side.
-    pub const SHADOW_MAP_SIZE: u32 = 2048;
-
+    /// A renderer with the default shadow map ([`Baseline`]'s), or the adapter's largest if smaller.
     pub fn new(ctx: GpuContext, lib: &ShaderLibrary) -> Result<Renderer, GpuError> {
-        let shadow_map_size = Self::SHADOW_MAP_SIZE.min(ctx.device.limits().max_texture_dimension_2d);
+        let shadow_map_size = Baseline::default().shadow_map.min(ctx.device.limits().max_texture_dimension_2d);
         let passes = Passes::new(&ctx, lib, shadow_map_size)?;
-        let d = &ctx.device;
-        let frame_buffer = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Renderer::frame_uniforms"),
-            size: std::mem::size_of::<FrameUniforms>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let shadow_uniforms = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Renderer::shadow_uniforms"),
-            size: std::mem::size_of::<ShadowUniforms>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let table = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Renderer::scatter_table"),
-            size: ScatterTable::BYTES,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
+        let uniform = |label: &str, size: usize| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let frame_buffer = uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>());
+        let shadow_uniforms = uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>());
         let timer = GpuTimer::new(&ctx);
         Ok(Renderer {
             ctx,
@@ -238,7 +262,6 @@ impl Renderer {
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
-            table,
             timer,
             geometry: None,
             targets: None,
@@ -246,6 +269,7 @@ impl Renderer {
             geometry_copy: None,
             keep_geometry: false,
             variant: None,
+            stale_bindings: true,
         })
     }
 
@@ -260,6 +284,7 @@ impl Renderer {
         }
         self.passes = passes;
         self.lib = lib.clone();
+        self.stale_bindings = true;
         Ok(())
     }
 
@@ -274,13 +299,11 @@ impl Renderer {
         if size == self.passes.shadow_map.size {
             return Ok(());
         }
-        if size == 0 {
-            return Err(GpuError::Validation {
-                during: "setting the shadow-map size".into(),
-                message: "the shadow map needs at least one texel per side".into(),
-            });
-        }
         self.ctx.check_texture("the shadow map", size, size)?;
+        Baseline::SHADOW_MAP.check(size as f64).map_err(|e| GpuError::Validation {
+            during: "setting the shadow-map size".into(),
+            message: e.to_string(),
+        })?;
         let map = self.ctx.scoped("creating the shadow map", || -> Result<ShadowMap, GpuError> {
             let mut map = ShadowMap::new(&self.ctx.device, &self.lib, size)?;
             if let Some(v) = self.variant {
@@ -289,6 +312,7 @@ impl Renderer {
             Ok(map)
         })??;
         self.passes.shadow_map = map;
+        self.stale_bindings = true;
         Ok(())
     }
 
@@ -308,7 +332,7 @@ impl Renderer {
         let m = &info.setup.mapping;
         let point = info.setup.frame.is_point() && info.setup.method != Method::Cartesian;
         let z = |v: f64| if point { v.to_degrees() } else { v };
-        let voxels_ran = info.passes.contains(&"voxelize");
+        let voxels_ran = info.passes.contains(&Pass::Voxelize);
         let fitted = if voxels_ran { self.pruned_z_range()? } else { None };
         let bins = fitted.map(|(lo, hi)| [z(lo as f64), z(hi as f64)]).unwrap_or([z(m.z_lo), z(m.z_hi)]);
         Ok(PruneReport {
@@ -318,7 +342,7 @@ impl Renderer {
             bins_z: bins,
             bins_z_casters: [z(m.z_lo), z(m.z_hi)],
             words_per_ray: m.grid.words(),
-            triangles_total: self.geometry.as_ref().map_or(0, |(g, _)| g.triangle_count),
+            triangles_total: self.geometry.as_ref().map_or(0, |g| g.gpu.triangle_count),
             triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
             passes: info.passes.clone(),
             variant: info.variant.to_string(),
@@ -342,11 +366,33 @@ impl Renderer {
         self.targets.as_ref().map(|t| &t.scatter)
     }
 
-    /// Uploads the scene's geometry (call again when the geometry changes).
+    /// Uploads the scene's geometry. [`Renderer::render_frame`] does this by itself whenever the
+    /// meshes differ from the last upload (a fingerprint of their content), so calling it is only
+    /// a way to pay for the upload ahead of the frame.
     pub fn set_scene(&mut self, scene: &Scene) {
         let l = self.ctx.device.limits();
-        let max_binding = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
-        self.geometry = Some((SceneGpu::new(&self.ctx.device, scene, max_binding), scene.triangle_count()));
+        let max_binding = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        let gpu = SceneGpu::new(&self.ctx.device, scene, max_binding);
+        self.geometry = Some(Geometry { gpu, fingerprint: scene.geometry_fingerprint() });
+        self.stale_bindings = true;
+    }
+
+    fn ensure_geometry(&mut self, scene: &Scene) -> Result<(), GpuError> {
+        if self.geometry.as_ref().is_some_and(|g| g.fingerprint == scene.geometry_fingerprint()) {
+            return Ok(());
+        }
+        // The lists Cull fills hold 20 bytes per triangle of a chunk: past the adapter's largest
+        // buffer the scene cannot be voxelized at all.
+        let n = scene.triangle_count() as u64;
+        let l = self.ctx.device.limits();
+        let per_chunk = l.max_storage_buffer_binding_size.min(l.max_buffer_size) / SceneGpu::TRIANGLE_BYTES;
+        self.ctx.check_buffer(
+            &format!("the work lists of {n} triangles"),
+            n.min(per_chunk) * (CullLists::BYTES_PER_TRIANGLE + 4),
+        )?;
+        let ctx = self.ctx.clone();
+        ctx.scoped("uploading the scene", || self.set_scene(scene))?;
+        self.ctx.take_uncaptured("uploading the scene")
     }
 
     fn ensure_targets(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
@@ -357,43 +403,15 @@ impl Renderer {
         let d = &self.ctx.device;
         use wgpu::TextureUsages as U;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let radiance = texture_2d(
-            d,
-            "Renderer::surface_radiance",
-            width,
-            height,
-            1,
-            Surface::RADIANCE,
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
-        );
-        let distance = texture_2d(
-            d,
-            "Renderer::surface_distance",
-            width,
-            height,
-            1,
-            Surface::DISTANCE,
-            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
-        );
-        let depth = texture_2d(d, "Renderer::depth", width, height, 1, Surface::DEPTH, U::RENDER_ATTACHMENT);
-        let scatter = texture_2d(
-            d,
-            "Renderer::scatter",
-            width,
-            height,
-            1,
-            Integrate::OUTPUT,
-            U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
-        );
-        let hdr = texture_2d(
-            d,
-            "Renderer::hdr",
-            width,
-            height,
-            1,
-            Composite::OUTPUT,
-            U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
-        );
+        let target = |label, format, usage| texture_2d(d, label, width, height, 1, format, usage);
+        let radiance =
+            target("Renderer::surface_radiance", Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let distance =
+            target("Renderer::surface_distance", Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let depth = target("Renderer::depth", Surface::DEPTH, U::RENDER_ATTACHMENT);
+        let written = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
+        let scatter = target("Renderer::scatter", Integrate::OUTPUT, written);
+        let hdr = target("Renderer::hdr", Composite::OUTPUT, written);
         self.targets = Some(Targets {
             width,
             height,
@@ -405,42 +423,78 @@ impl Renderer {
             hdr_view: view(&hdr),
             hdr,
         });
+        self.stale_bindings = true;
         Ok(())
     }
 
     fn ensure_grid(&mut self, grid: Grid) -> Result<(), GpuError> {
-        if self.grid.as_ref().is_some_and(|g| g.grid == grid) {
+        if self.grid.as_ref().is_some_and(|(g, _)| *g == grid) {
             return Ok(());
         }
         self.ctx.check_buffer(&format!("the {grid} grid"), grid.bytes())?;
-        self.ctx.check_texture(&format!("the {grid} grid's planes x rays"), grid.planes, grid.rays)?;
-        let d = &self.ctx.device;
-        let bits = d.create_buffer(&wgpu::BufferDescriptor {
+        let bits = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Renderer::grid_bits"),
             size: grid.bytes(),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        self.grid = Some(GridResources { grid, bits });
+        self.grid = Some((grid, bits));
+        self.geometry_copy = None;
+        self.stale_bindings = true;
         Ok(())
     }
 
-    /// Renders one frame of `scene` at `width x height` into the GPU targets
-    /// ([`Renderer::hdr_texture`], [`Renderer::scatter_texture`]) without reading the images back:
-    /// what an interactive viewer calls every frame.
-    pub fn render_frame(
-        &mut self,
-        scene: &Scene,
-        width: u32,
-        height: u32,
-        method: Method,
-    ) -> Result<FrameInfo, GpuError> {
-        if self.geometry.as_ref().is_none_or(|(_, n)| *n != scene.triangle_count()) {
-            self.set_scene(scene);
-        }
+    /// Makes every pass's bind groups for the current resources (after any of them changed).
+    fn rebind(&mut self) {
+        let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else { return };
+        let d = &self.ctx.device;
+        let p = &mut self.passes;
+        use wgpu::BindingResource as R;
+        let frame = || self.frame_buffer.as_entire_binding();
+        let shadow = || self.shadow_uniforms.as_entire_binding();
+        let shadow_map = R::TextureView(&p.shadow_map.map_view);
+        p.surface.bind(d, SurfaceBindings { f: frame(), shadow: shadow(), shadow_map: shadow_map.clone() });
+        p.ranges.bind(d, &self.frame_buffer, &t.distance);
+        p.cull.bind(d, &self.frame_buffer, &geometry.gpu);
+        p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
+        p.scan.bind(d, ScanBindings { f: frame(), grid: bits.as_entire_binding() });
+        p.scatter_table.bind(d, &self.frame_buffer);
+        let integrate = IntegrateBindings {
+            f: frame(),
+            grid: bits.as_entire_binding(),
+            table: p.scatter_table.table.as_entire_binding(),
+            distance: R::TextureView(&t.distance),
+            scatter_out: R::TextureView(&t.scatter_view),
+        };
+        p.integrate.bind(d, integrate);
+        let march = p.raymarch.uniforms.clone();
+        let raymarch = RaymarchBindings {
+            f: frame(),
+            shadow: shadow(),
+            shadow_map,
+            distance: R::TextureView(&t.distance),
+            scatter_out: R::TextureView(&t.scatter_view),
+            march: march.as_entire_binding(),
+        };
+        p.raymarch.bind(d, raymarch);
+        let composite = CompositeBindings {
+            f: frame(),
+            surface: R::TextureView(&t.radiance),
+            distance: R::TextureView(&t.distance),
+            scatter: R::TextureView(&t.scatter_view),
+            hdr: R::TextureView(&t.hdr_view),
+        };
+        p.composite.bind(d, composite);
+        self.stale_bindings = false;
+    }
+
+    /// Everything a frame needs before its passes are recorded: resources, pipelines of the variant,
+    /// bind groups and this frame's uniforms.
+    fn prepare(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, RenderError> {
+        self.ensure_geometry(scene)?;
         self.ensure_targets(width, height)?;
         self.ensure_grid(scene.grid)?;
-        if self.keep_geometry && self.geometry_copy.as_ref().is_none_or(|b| b.size() != scene.grid.bytes()) {
+        if self.keep_geometry && self.geometry_copy.is_none() {
             self.geometry_copy = Some(self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("Renderer::geometry_copy"),
                 size: scene.grid.bytes(),
@@ -456,189 +510,118 @@ impl Renderer {
             self.passes.prepare(&self.ctx, variant)?;
             self.variant = Some(variant);
         }
-        let (Some((geometry, _)), Some(t), Some(g)) = (&self.geometry, &self.targets, &self.grid) else {
-            unreachable!("ensured above")
-        };
-        let ctx = &self.ctx;
-        let d = &ctx.device;
-        ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
+        if self.stale_bindings {
+            let ctx = self.ctx.clone();
+            ctx.scoped("binding the passes", || self.rebind())?;
+        }
+        self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
-        ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
+        self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
+        Ok(setup)
+    }
 
-        let bind = |label: &str, layout: &wgpu::BindGroupLayout, resources: &[wgpu::BindingResource]| {
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout,
-                entries: &resources
-                    .iter()
-                    .enumerate()
-                    .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
-                    .collect::<Vec<_>>(),
-            })
+    /// Renders one frame of `scene` at `width x height` into the GPU targets
+    /// ([`Renderer::hdr_texture`], [`Renderer::scatter_texture`]) without reading the images back:
+    /// what an interactive viewer calls every frame.
+    pub fn render_frame(
+        &mut self,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        method: Method,
+    ) -> Result<FrameInfo, RenderError> {
+        let setup = self.prepare(scene, width, height, method)?;
+        let v = Variant::new(setup.frame.is_point(), &scene.medium.phase);
+        let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
+            unreachable!("prepare made them")
         };
-        use wgpu::BindingResource as R;
-        let frame = self.frame_buffer.as_entire_binding();
-        let surface_bg = bind(
-            "Surface::bind_group",
-            &self.passes.surface.layout,
-            &[
-                frame.clone(),
-                self.shadow_uniforms.as_entire_binding(),
-                R::TextureView(&self.passes.shadow_map.map_view),
-            ],
-        );
-        let cull = &self.passes.cull;
-        // One Cull and one Voxelize bind group per chunk of triangles (one chunk unless the mesh
-        // is larger than the adapter's largest storage binding).
-        let chunk_groups: Vec<(wgpu::BindGroup, wgpu::BindGroup, u32)> = geometry
-            .chunks
-            .iter()
-            .filter(|(_, n)| *n > 0)
-            .map(|(tris, n)| {
-                let l = &geometry.lists;
-                let cull_bg = bind(
-                    "Cull::bind_group",
-                    &cull.layout,
-                    &[
-                        frame.clone(),
-                        tris.as_entire_binding(),
-                        l.records.as_entire_binding(),
-                        l.offsets.as_entire_binding(),
-                        l.blocks.as_entire_binding(),
-                        cull.counters.as_entire_binding(),
-                        cull.dispatch.as_entire_binding(),
-                    ],
-                );
-                let voxelize_bg = bind(
-                    "Voxelize::bind_group",
-                    &self.passes.voxelize.layout,
-                    &[
-                        frame.clone(),
-                        tris.as_entire_binding(),
-                        g.bits.as_entire_binding(),
-                        l.records.as_entire_binding(),
-                        l.offsets.as_entire_binding(),
-                        l.blocks.as_entire_binding(),
-                        cull.counters.as_entire_binding(),
-                    ],
-                );
-                (cull_bg, voxelize_bg, *n)
-            })
-            .collect();
-        let scan_bg = bind("Scan::bind_group", &self.passes.scan.layout, &[frame.clone(), g.bits.as_entire_binding()]);
-        let table_bg = bind(
-            "ScatterTable::bind_group",
-            &self.passes.scatter_table.layout,
-            &[frame.clone(), self.table.as_entire_binding()],
-        );
-        let integrate_bg = bind(
-            "Integrate::bind_group",
-            &self.passes.integrate.layout,
-            &[
-                frame.clone(),
-                g.bits.as_entire_binding(),
-                self.table.as_entire_binding(),
-                R::TextureView(&t.distance),
-                R::TextureView(&t.scatter_view),
-            ],
-        );
-        let raymarch_bg = bind(
-            "Raymarch::bind_group",
-            &self.passes.raymarch.layout,
-            &[
-                frame.clone(),
-                self.shadow_uniforms.as_entire_binding(),
-                R::TextureView(&self.passes.shadow_map.map_view),
-                R::TextureView(&t.distance),
-                R::TextureView(&t.scatter_view),
-                self.passes.raymarch.uniforms.as_entire_binding(),
-            ],
-        );
-        let ranges_bg = bind(
-            "Ranges::bind_group",
-            &self.passes.ranges.layout,
-            &[frame.clone(), R::TextureView(&t.distance), self.passes.ranges.result.as_entire_binding()],
-        );
-        let composite_bg = bind(
-            "Composite::bind_group",
-            &self.passes.composite.layout,
-            &[
-                frame,
-                R::TextureView(&t.radiance),
-                R::TextureView(&t.distance),
-                R::TextureView(&t.scatter_view),
-                R::TextureView(&t.hdr_view),
-            ],
-        );
-
-        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Renderer::frame") });
+        let (p, queue, size) = (&self.passes, &self.ctx.queue, (width, height));
+        let enc =
+            self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Renderer::frame") });
         let mut timer = self.timer.take();
-        if let Some(tm) = timer.as_mut() {
-            tm.begin(&mut enc);
+        let mut f = FrameRecorder { enc, timer: timer.as_mut(), ran: Vec::new() };
+        if let Some(t) = f.timer.as_deref_mut() {
+            t.begin(&mut f.enc);
         }
-        let mut ran: Vec<&'static str> = Vec::new();
-        let mut mark = |enc: &mut wgpu::CommandEncoder, pass: &'static str| {
-            ran.push(pass);
-            if let Some(tm) = timer.as_mut() {
-                tm.mark(enc, pass);
-            }
-        };
         // The frame: an ordered list of passes.
-        self.passes.shadow_map.record(&ctx.queue, &mut enc, variant, scene, geometry);
-        mark(&mut enc, "shadow_map");
-        self.passes.surface.record(&mut enc, variant, &surface_bg, geometry, &t.radiance, &t.distance, &t.depth);
-        mark(&mut enc, "surface");
-        if let Method::Raymarch { steps, jitter } = method {
-            self.passes.raymarch.record(&ctx.queue, &mut enc, variant, &raymarch_bg, width, height, steps, jitter);
-            mark(&mut enc, "raymarch");
-        } else if !scene.needs_scattering() {
+        p.shadow_map.record(queue, &mut f.enc, v, scene, &geometry.gpu);
+        f.mark(Pass::ShadowMap);
+        let targets = SurfaceTargets { radiance: &t.radiance, distance: &t.distance, depth: &t.depth };
+        p.surface.record(&mut f.enc, v, &geometry.gpu, targets);
+        f.mark(Pass::Surface);
+        match method {
+            Method::Raymarch { steps, jitter } => {
+                p.raymarch.record(queue, &mut f.enc, v, size, steps, jitter);
+                f.mark(Pass::Raymarch);
+            }
             // Nothing scatters: no voxel pass has anything to compute; Integrate writes zeros.
-            enc.clear_buffer(&g.bits, 0, None);
-            self.passes.integrate.record(&mut enc, variant, &integrate_bg, width, height);
-            mark(&mut enc, "integrate");
-        } else {
-            if self.prune {
-                self.passes.ranges.record(&mut enc, variant, &ranges_bg, &self.frame_buffer, width, height);
-                mark(&mut enc, "ranges");
+            _ if !scene.needs_scattering() => {
+                p.integrate.record(&mut f.enc, v, width, height);
+                f.mark(Pass::Integrate);
             }
-            enc.clear_buffer(&g.bits, 0, None);
-            self.passes.cull.begin_frame(&mut enc);
-            // Chunks are culled and voxelized in turn: they share the Cull pass's lists.
-            for (cull_bg, voxelize_bg, n) in &chunk_groups {
-                self.passes.cull.record(&mut enc, variant, cull_bg, *n);
-                mark(&mut enc, "cull");
-                self.passes.voxelize.record(&mut enc, variant, voxelize_bg, &self.passes.cull.dispatch);
-                mark(&mut enc, "voxelize");
+            _ => {
+                if self.prune {
+                    p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
+                    f.mark(Pass::Ranges);
+                }
+                f.enc.clear_buffer(bits, 0, None);
+                p.cull.begin_frame(&mut f.enc);
+                // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
+                for chunk in 0..p.cull.chunks() {
+                    p.cull.record(&mut f.enc, v, chunk);
+                    f.mark(Pass::Cull);
+                    p.voxelize.record(&mut f.enc, v, chunk, &p.cull.dispatch);
+                    f.mark(Pass::Voxelize);
+                }
+                if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
+                    f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
+                }
+                p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS);
+                f.mark(Pass::Scan);
+                if setup.frame.is_point() && method == Method::Vsv {
+                    p.scatter_table.record(&mut f.enc, v);
+                    f.mark(Pass::ScatterTable);
+                }
+                p.integrate.record(&mut f.enc, v, width, height);
+                f.mark(Pass::Integrate);
             }
-            if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
-                enc.copy_buffer_to_buffer(&g.bits, 0, copy, 0, g.bits.size());
-            }
-            self.passes.scan.record(&mut enc, &scan_bg, &self.passes.cull.dispatch, Cull::SCAN_ARGS);
-            mark(&mut enc, "scan");
-            if scene.light.is_point() && method == Method::Vsv {
-                self.passes.scatter_table.record(&mut enc, variant, &table_bg);
-                mark(&mut enc, "scatter_table");
-            }
-            self.passes.integrate.record(&mut enc, variant, &integrate_bg, width, height);
-            mark(&mut enc, "integrate");
         }
-        self.passes.composite.record(&mut enc, variant, &composite_bg, width, height);
-        mark(&mut enc, "composite");
-        if let Some(tm) = timer.as_ref() {
-            tm.resolve(&mut enc);
-        }
-        ctx.queue.submit([enc.finish()]);
-        let timings = match timer.as_ref() {
-            Some(tm) => tm.read(ctx)?,
-            None => Vec::new(),
-        };
+        p.composite.record(&mut f.enc, v, width, height);
+        f.mark(Pass::Composite);
+        let done = self.finish(f, setup, v);
         self.timer = timer;
+        done
+    }
 
-        Ok(FrameInfo { timings, setup, passes: ran, variant })
+    /// Submits the frame and reads its timestamps back.
+    fn finish(&self, f: FrameRecorder, setup: FrameSetup, variant: Variant) -> Result<FrameInfo, RenderError> {
+        let FrameRecorder { mut enc, timer, ran } = f;
+        if let Some(t) = timer.as_deref() {
+            t.resolve(&mut enc);
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.take_uncaptured("rendering the frame")?;
+        let mut timings: Vec<PassTiming> = Vec::new();
+        for (pass, ms) in timer.map(|t| t.read(&self.ctx)).transpose()?.unwrap_or_default() {
+            // A pass that ran once per chunk is reported once, with the sum.
+            match timings.iter_mut().find(|t| t.pass == pass) {
+                Some(t) => t.ms += ms,
+                None => timings.push(PassTiming { pass, ms }),
+            }
+        }
+        let mut passes = ran;
+        passes.dedup();
+        Ok(FrameInfo { timings, setup, passes, variant })
     }
 
     /// Renders one frame and reads the final and the scattered image back to the CPU.
-    pub fn render(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<RenderOutput, GpuError> {
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        method: Method,
+    ) -> Result<RenderOutput, RenderError> {
         let FrameInfo { timings, setup, passes, variant } = self.render_frame(scene, width, height, method)?;
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
@@ -656,8 +639,8 @@ impl Renderer {
     /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the
     /// inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
-        let g = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
-        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(&g.bits)?).to_vec())
+        let (_, bits) = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
+        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(bits)?).to_vec())
     }
 
     /// Keep a copy of the geometry voxels (the grid before the scan) of every following frame, for
@@ -739,5 +722,59 @@ mod layout_tests {
             fields!(ShadowUniforms: view_proj, params, origin),
             size_of::<ShadowUniforms>(),
         );
+    }
+}
+
+#[cfg(test)]
+mod binding_tests {
+    //! Each pass declares its bind group once (`util::bindings!`): here naga checks that binding i
+    //! of the WGSL is the variable of that name and kind, so the Rust list, the layout built from
+    //! it and the shader cannot drift apart.
+    use super::util::Kind;
+    use super::*;
+
+    fn check(file: &str, slots: &[(&str, Kind)]) {
+        let (module, _) = ShaderLibrary::embedded().validate(file).unwrap_or_else(|e| panic!("{e}"));
+        let mut found: Vec<(u32, String, Kind)> = Vec::new();
+        for (_, var) in module.global_variables.iter() {
+            let Some(rb) = &var.binding else { continue };
+            assert_eq!(rb.group, 0, "{file}: only group 0 is used");
+            let kind = match (var.space, &module.types[var.ty].inner) {
+                (naga::AddressSpace::Uniform, _) => Kind::Uniform,
+                (naga::AddressSpace::Storage { access }, _) if access.contains(naga::StorageAccess::STORE) => {
+                    Kind::StorageRw
+                }
+                (naga::AddressSpace::Storage { .. }, _) => Kind::Storage,
+                (_, naga::TypeInner::Image { class: naga::ImageClass::Storage { format, .. }, .. }) => {
+                    let format = match format {
+                        naga::StorageFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
+                        other => panic!("{file}: storage format {other:?} not mapped in this test"),
+                    };
+                    Kind::StorageTexture(format)
+                }
+                (_, naga::TypeInner::Image { arrayed: true, .. }) => Kind::TextureArray,
+                (_, naga::TypeInner::Image { .. }) => Kind::Texture,
+                (space, inner) => panic!("{file}: binding {} has an unexpected kind {space:?} {inner:?}", rb.binding),
+            };
+            found.push((rb.binding, var.name.clone().unwrap_or_default(), kind));
+        }
+        found.sort_by_key(|f| f.0);
+        let want: Vec<(u32, String, Kind)> =
+            slots.iter().enumerate().map(|(i, (name, kind))| (i as u32, name.to_string(), *kind)).collect();
+        assert_eq!(found, want, "{file}: WGSL bindings (left) differ from the pass's declaration (right)");
+    }
+
+    #[test]
+    fn every_pass_declares_the_bindings_of_its_shader() {
+        check("shadow_map.wgsl", ShadowMapBindings::SLOTS);
+        check("surface.wgsl", SurfaceBindings::SLOTS);
+        check("ranges.wgsl", RangesBindings::SLOTS);
+        check("cull.wgsl", CullBindings::SLOTS);
+        check("voxelize.wgsl", VoxelizeBindings::SLOTS);
+        check("scan.wgsl", ScanBindings::SLOTS);
+        check("scatter_table.wgsl", ScatterTableBindings::SLOTS);
+        check("integrate.wgsl", IntegrateBindings::SLOTS);
+        check("raymarch.wgsl", RaymarchBindings::SLOTS);
+        check("composite.wgsl", CompositeBindings::SLOTS);
     }
 }

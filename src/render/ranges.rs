@@ -2,13 +2,19 @@
 //! `z_hi = min(casters' z_hi, max over pixels of the surface's z)`, computed on the GPU and copied
 //! into the frame uniforms before voxelization, so far-away geometry does not dilute the bins.
 
-use super::util::{storage_entry, texture_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+bindings! {
+    /// Ranges' bind group (ranges.wgsl; `out` is the pass's own result buffer).
+    RangesBindings { f: Kind::Uniform, distance: Kind::Texture, out: Kind::StorageRw }
+}
+
 pub struct Ranges {
     pipelines: SpecialisedCompute<2>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
     /// `[max visible z, z_lo, z_hi, unused]` as float bits.
     pub result: wgpu::Buffer,
 }
@@ -19,14 +25,7 @@ impl Ranges {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Ranges, GpuError> {
         let module = lib.module(device, "ranges.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Ranges::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                texture_entry(1, wgpu::ShaderStages::COMPUTE, wgpu::TextureViewDimension::D2),
-                storage_entry(2, wgpu::ShaderStages::COMPUTE, false),
-            ],
-        });
+        let layout = RangesBindings::layout(device, "Ranges::layout", wgpu::ShaderStages::COMPUTE);
         let result = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Ranges::result"),
             size: 16,
@@ -43,8 +42,19 @@ impl Ranges {
                 Specialised::Light,
             ),
             layout,
+            bind_group: None,
             result,
         })
+    }
+
+    /// (Re)binds the inputs; called when the targets change.
+    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, distance: &wgpu::TextureView) {
+        let b = RangesBindings {
+            f: frame.as_entire_binding(),
+            distance: wgpu::BindingResource::TextureView(distance),
+            out: self.result.as_entire_binding(),
+        };
+        self.bind_group = Some(b.bind(device, "Ranges::bind_group", &self.layout));
     }
 
     /// Builds the pipelines specialised to `variant` unless they exist.
@@ -57,13 +67,12 @@ impl Ranges {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
-        bind_group: &wgpu::BindGroup,
         frame_uniforms: &wgpu::Buffer,
         width: u32,
         height: u32,
     ) {
-        // Renderer::render_frame prepares every variant it records.
-        let Some([reduce, finish]) = self.pipelines.get(variant) else {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([reduce, finish]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else {
             return;
         };
         encoder.clear_buffer(&self.result, 0, None);

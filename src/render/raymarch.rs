@@ -14,11 +14,24 @@
 //! the scene's box and `max(steps / 4, 4)` more cover the rest of the ray out to infinity in the
 //! reference's angle variable (see the shader's header), so the march converges to the reference.
 
-use super::util::{storage_texture_entry, texture_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
+use crate::params::Baseline;
 use bytemuck::{Pod, Zeroable};
 use glam::UVec4;
+
+bindings! {
+    /// Raymarch's bind group (raymarch.wgsl; `march` is the pass's own uniform buffer).
+    RaymarchBindings {
+        f: Kind::Uniform,
+        shadow: Kind::Uniform,
+        shadow_map: Kind::TextureArray,
+        distance: Kind::Texture,
+        scatter_out: Kind::StorageTexture(Raymarch::OUTPUT),
+        march: Kind::Uniform,
+    }
+}
 
 /// `struct March` in raymarch.wgsl.
 #[repr(C)]
@@ -30,49 +43,29 @@ pub struct RaymarchUniforms {
 
 pub struct Raymarch {
     pipelines: SpecialisedCompute<1>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
     /// Steps and jitter of the next frame, written by [`Raymarch::record`].
     pub uniforms: wgpu::Buffer,
 }
 
 impl Raymarch {
     pub const OUTPUT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-    /// Most steps per pixel: beyond this a frame takes seconds even on a fast GPU, and the error is
-    /// long dominated by the shadow map's resolution.
-    pub const MAX_STEPS: u32 = 65536;
+    /// Most steps per pixel ([`Baseline::STEPS`]).
+    pub const MAX_STEPS: u32 = Baseline::STEPS.max as u32;
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Raymarch, GpuError> {
         let module = lib.module(device, "raymarch.wgsl")?;
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Raymarch::layout"),
-            entries: &[
-                uniform_entry(0, c),
-                uniform_entry(1, c),
-                texture_entry(2, c, wgpu::TextureViewDimension::D2Array),
-                texture_entry(3, c, wgpu::TextureViewDimension::D2),
-                storage_texture_entry(4, Self::OUTPUT),
-                uniform_entry(5, c),
-            ],
-        });
+        let layout = RaymarchBindings::layout(device, "Raymarch::layout", wgpu::ShaderStages::COMPUTE);
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Raymarch::uniforms"),
             size: std::mem::size_of::<RaymarchUniforms>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Raymarch {
-            pipelines: SpecialisedCompute::new(
-                device,
-                "Raymarch",
-                module,
-                &layout,
-                ["main"],
-                Specialised::LightAndPhase,
-            ),
-            layout,
-            uniforms,
-        })
+        let pipelines =
+            SpecialisedCompute::new(device, "Raymarch", module, &layout, ["main"], Specialised::LightAndPhase);
+        Ok(Raymarch { pipelines, layout, bind_group: None, uniforms })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -80,28 +73,30 @@ impl Raymarch {
         self.pipelines.prepare(device, variant);
     }
 
+    /// (Re)binds the inputs; called when the targets or the shadow map change. `b.march` is
+    /// ignored: the pass binds its own uniforms.
+    pub fn bind(&mut self, device: &wgpu::Device, b: RaymarchBindings) {
+        let b = RaymarchBindings { march: self.uniforms.as_entire_binding(), ..b };
+        self.bind_group = Some(b.bind(device, "Raymarch::bind_group", &self.layout));
+    }
+
     /// Records the march of every pixel. `steps` is clamped to `1..=MAX_STEPS`.
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
-        bind_group: &wgpu::BindGroup,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
         steps: u32,
         jitter: bool,
     ) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([pipeline]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let u = RaymarchUniforms { params: UVec4::new(steps.clamp(1, Self::MAX_STEPS), jitter as u32, 0, 0) };
         // Queue writes land before the submission that carries this encoder.
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Raymarch::pass"), timestamp_writes: None });
-        // Renderer::render_frame prepares every variant it records.
-        let Some([pipeline]) = self.pipelines.get(variant) else {
-            return;
-        };
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
@@ -110,31 +105,22 @@ impl Raymarch {
 
 #[cfg(test)]
 mod tests {
-    //! raymarch.wgsl keeps its own copy of the shadow-lookup struct: it must match surface.wgsl's
-    //! (whose layout `layout_tests` checks against the Rust one) member for member.
     use super::*;
-
-    fn members(file: &str, name: &str) -> (Vec<(Option<String>, u32)>, u32) {
-        let (module, _) = ShaderLibrary::embedded().validate(file).unwrap_or_else(|e| panic!("{e}"));
-        for (_, ty) in module.types.iter() {
-            if ty.name.as_deref() == Some(name) {
-                if let naga::TypeInner::Struct { members, span } = &ty.inner {
-                    return (members.iter().map(|m| (m.name.clone(), m.offset)).collect(), *span);
-                }
-            }
-        }
-        panic!("struct {name} not found in {file}");
-    }
-
-    #[test]
-    fn shadow_faces_match_surface() {
-        assert_eq!(members("raymarch.wgsl", "ShadowFaces"), members("surface.wgsl", "ShadowFaces"));
-    }
 
     #[test]
     fn march_uniforms_match_wgsl() {
-        let (m, span) = members("raymarch.wgsl", "March");
-        assert_eq!(m, vec![(Some("params".to_string()), 0)]);
+        let (module, _) = ShaderLibrary::embedded().validate("raymarch.wgsl").unwrap_or_else(|e| panic!("{e}"));
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, ty)| match &ty.inner {
+                naga::TypeInner::Struct { members, span } if ty.name.as_deref() == Some("March") => {
+                    Some((members.iter().map(|m| (m.name.clone(), m.offset)).collect::<Vec<_>>(), *span))
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("struct March not found"));
+        assert_eq!(members, vec![(Some("params".to_string()), 0)]);
         assert_eq!(span as usize, std::mem::size_of::<RaymarchUniforms>());
     }
 }

@@ -1,37 +1,38 @@
 //! Scan: the shadow volume as an inclusive prefix-OR of the geometry bits along each light ray,
-//! in increasing gamma (`shaders/scan.wgsl`): `shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]`.
+//! in increasing gamma (`shaders/scan.wgsl`):
+//!
+//!   shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]
 
-use super::util::{compute_pipeline, storage_entry, uniform_entry};
+use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
+
+bindings! {
+    /// Scan's bind group (scan.wgsl).
+    ScanBindings { f: Kind::Uniform, grid: Kind::StorageRw }
+}
 
 pub struct Scan {
     pipeline: wgpu::ComputePipeline,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Scan {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Scan, GpuError> {
         let module = lib.module(device, "scan.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Scan::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
-            ],
-        });
+        let layout = ScanBindings::layout(device, "Scan::layout", wgpu::ShaderStages::COMPUTE);
         let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout);
-        Ok(Scan { pipeline, layout })
+        Ok(Scan { pipeline, layout, bind_group: None })
     }
 
-    /// `args`: the Cull pass's DispatchIndirect arguments (no workgroups when nothing was kept).
-    /// `args` holds the indirect dispatch at byte `offset` (empty when no caster was kept).
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        bind_group: &wgpu::BindGroup,
-        args: &wgpu::Buffer,
-        offset: u64,
-    ) {
+    /// (Re)binds the inputs; called when the grid changes.
+    pub fn bind(&mut self, device: &wgpu::Device, b: ScanBindings) {
+        self.bind_group = Some(b.bind(device, "Scan::bind_group", &self.layout));
+    }
+
+    /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, args: &wgpu::Buffer, offset: u64) {
+        let Some(bind_group) = &self.bind_group else { return };
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
         pass.set_pipeline(&self.pipeline);

@@ -7,39 +7,39 @@
 //! so that a lit run `[psi_a, psi_b]` contributes `sigma_s I0 / h (G(psi_b) - G(psi_a))`.
 
 use super::frame::{TABLE_COLS, TABLE_ROWS};
-use super::util::{storage_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+bindings! {
+    /// ScatterTable's bind group (scatter_table.wgsl).
+    ScatterTableBindings { f: Kind::Uniform, table: Kind::StorageRw }
+}
+
 pub struct ScatterTable {
     pipelines: SpecialisedCompute<1>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
+    /// `rows x (cols + 1)` `vec4<f32>`: G / (pi - gamma) per row.
+    pub table: wgpu::Buffer,
 }
 
 impl ScatterTable {
-    /// Bytes of the table buffer: `rows x (cols + 1)` `vec4<f32>`.
+    /// Bytes of the table buffer.
     pub const BYTES: u64 = TABLE_ROWS as u64 * (TABLE_COLS as u64 + 1) * 16;
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<ScatterTable, GpuError> {
         let module = lib.module(device, "scatter_table.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ScatterTable::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE),
-                storage_entry(1, wgpu::ShaderStages::COMPUTE, false),
-            ],
+        let layout = ScatterTableBindings::layout(device, "ScatterTable::layout", wgpu::ShaderStages::COMPUTE);
+        let pipelines =
+            SpecialisedCompute::new(device, "ScatterTable", module, &layout, ["main"], Specialised::LightAndPhase);
+        let table = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ScatterTable::table"),
+            size: Self::BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
         });
-        Ok(ScatterTable {
-            pipelines: SpecialisedCompute::new(
-                device,
-                "ScatterTable",
-                module,
-                &layout,
-                ["main"],
-                Specialised::LightAndPhase,
-            ),
-            layout,
-        })
+        Ok(ScatterTable { pipelines, layout, bind_group: None, table })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -47,15 +47,19 @@ impl ScatterTable {
         self.pipelines.prepare(device, variant);
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, bind_group: &wgpu::BindGroup) {
+    /// Binds the frame uniforms and its own table (once).
+    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer) {
+        let b = ScatterTableBindings { f: frame.as_entire_binding(), table: self.table.as_entire_binding() };
+        self.bind_group = Some(b.bind(device, "ScatterTable::bind_group", &self.layout));
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([pipeline]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ScatterTable::pass"),
             timestamp_writes: None,
         });
-        // Renderer::render_frame prepares every variant it records.
-        let Some([pipeline]) = self.pipelines.get(variant) else {
-            return;
-        };
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(TABLE_ROWS.div_ceil(64), 1, 1);

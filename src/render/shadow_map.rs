@@ -5,13 +5,18 @@
 //! from a plane beyond the scene. The surface pass compares against it with a small bias.
 
 use super::scene_gpu::SceneGpu;
-use super::util::{scene_vertex_layout, texture_2d, uniform_entry};
+use super::util::{bindings, scene_vertex_layout, texture_2d, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use crate::params::Light;
 use crate::scene::Scene;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
+
+bindings! {
+    /// One face's bind group (shadow_map.wgsl).
+    ShadowMapBindings { face: Kind::Uniform }
+}
 
 /// One face's uniforms (`struct Face` in the WGSL).
 #[repr(C)]
@@ -41,8 +46,9 @@ pub struct ShadowMap {
     /// R32Float, six layers.
     pub map: wgpu::Texture,
     pub map_view: wgpu::TextureView,
-    depth: wgpu::Texture,
-    faces: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    depth: wgpu::TextureView,
+    /// Per face: its uniforms, their bind group and the map layer it renders into.
+    faces: Vec<(wgpu::Buffer, wgpu::BindGroup, wgpu::TextureView)>,
 }
 
 impl ShadowMap {
@@ -50,10 +56,7 @@ impl ShadowMap {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary, size: u32) -> Result<ShadowMap, GpuError> {
         let module = lib.module(device, "shadow_map.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ShadowMap::layout"),
-            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
-        });
+        let layout = ShadowMapBindings::layout(device, "ShadowMap::layout", wgpu::ShaderStages::VERTEX_FRAGMENT);
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("ShadowMap::pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -81,7 +84,8 @@ impl ShadowMap {
             1,
             wgpu::TextureFormat::Depth32Float,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
+        )
+        .create_view(&Default::default());
         let faces = (0..6)
             .map(|i| {
                 let buf = device.create_buffer(&wgpu::BufferDescriptor {
@@ -90,12 +94,19 @@ impl ShadowMap {
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
-                let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(&format!("ShadowMap::face{i}_bind_group")),
-                    layout: &layout,
-                    entries: &[wgpu::BindGroupEntry { binding: 0, resource: buf.as_entire_binding() }],
+                let bg = ShadowMapBindings { face: buf.as_entire_binding() }.bind(
+                    device,
+                    &format!("ShadowMap::face{i}_bind_group"),
+                    &layout,
+                );
+                let view = map.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(&format!("ShadowMap::face{i}_view")),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: i,
+                    array_layer_count: Some(1),
+                    ..Default::default()
                 });
-                (buf, bg)
+                (buf, bg, view)
             })
             .collect();
         Ok(ShadowMap {
@@ -209,19 +220,12 @@ impl ShadowMap {
         let Some(pipeline) = self.pipelines.get(variant) else { return };
         let (faces, _, count) = self.uniforms(scene);
         for (i, face) in faces.iter().enumerate().take(count) {
-            queue.write_buffer(&self.faces[i].0, 0, bytemuck::bytes_of(face));
-            let view = self.map.create_view(&wgpu::TextureViewDescriptor {
-                label: Some("ShadowMap::face_view"),
-                dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: i as u32,
-                array_layer_count: Some(1),
-                ..Default::default()
-            });
-            let depth = self.depth.create_view(&Default::default());
+            let (uniforms, bind_group, view) = &self.faces[i];
+            queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("ShadowMap::pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
+                    view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -230,7 +234,7 @@ impl ShadowMap {
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
+                    view: &self.depth,
                     depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
                     stencil_ops: None,
                 }),
@@ -239,7 +243,7 @@ impl ShadowMap {
                 multiview_mask: None,
             });
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &self.faces[i].1, &[]);
+            pass.set_bind_group(0, bind_group, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
             pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..geometry.index_count, 0, 0..1);

@@ -5,15 +5,28 @@
 //!   (point) or E0 exp(-sigma_t l) (directional). The view path's attenuation is the composite's.
 
 use super::scene_gpu::SceneGpu;
-use super::util::{scene_vertex_layout, texture_entry, uniform_entry};
+use super::util::{bindings, scene_vertex_layout, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
+
+bindings! {
+    /// Surface's bind group (surface.wgsl).
+    SurfaceBindings { f: Kind::Uniform, shadow: Kind::Uniform, shadow_map: Kind::TextureArray }
+}
+
+/// The pass's render targets, `width x height`.
+pub struct SurfaceTargets<'a> {
+    pub radiance: &'a wgpu::TextureView,
+    pub distance: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+}
 
 pub struct Surface {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
     pipelines: VariantPipelines<wgpu::RenderPipeline>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Surface {
@@ -25,20 +38,24 @@ impl Surface {
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Surface, GpuError> {
         let module = lib.module(device, "surface.wgsl")?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Surface::layout"),
-            entries: &[
-                uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
-                uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
-                texture_entry(2, wgpu::ShaderStages::FRAGMENT, wgpu::TextureViewDimension::D2Array),
-            ],
-        });
+        let layout = SurfaceBindings::layout(device, "Surface::layout", wgpu::ShaderStages::VERTEX_FRAGMENT);
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Surface::pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        Ok(Surface { module, pipeline_layout: pl, pipelines: VariantPipelines::new(Specialised::Light), layout })
+        Ok(Surface {
+            module,
+            pipeline_layout: pl,
+            pipelines: VariantPipelines::new(Specialised::Light),
+            layout,
+            bind_group: None,
+        })
+    }
+
+    /// (Re)binds the inputs; called when the shadow map changes.
+    pub fn bind(&mut self, device: &wgpu::Device, b: SurfaceBindings) {
+        self.bind_group = Some(b.bind(device, "Surface::bind_group", &self.layout));
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -75,21 +92,16 @@ impl Surface {
         });
     }
 
-    #[allow(clippy::too_many_arguments)] // the pass's three targets, named at the call
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
-        bind_group: &wgpu::BindGroup,
         geometry: &SceneGpu,
-        radiance: &wgpu::TextureView,
-        distance: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
+        targets: SurfaceTargets,
     ) {
-        // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else {
-            return;
-        };
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some(pipeline), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
+        let SurfaceTargets { radiance, distance, depth } = targets;
         let color = |view, clear: f64| {
             Some(wgpu::RenderPassColorAttachment {
                 view,

@@ -1,4 +1,70 @@
-//! Small constructors shared by the passes (bind-group-layout entries, textures).
+//! Small constructors shared by the passes (bind groups, textures, pipelines).
+
+/// What one binding of a pass's bind group holds (its layout entry's type).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Uniform,
+    /// `var<storage, read>`.
+    Storage,
+    /// `var<storage, read_write>`.
+    StorageRw,
+    /// `texture_2d<f32>`, not filterable (loaded, never sampled).
+    Texture,
+    /// `texture_2d_array<f32>`, not filterable.
+    TextureArray,
+    /// `texture_storage_2d<format, write>`.
+    StorageTexture(wgpu::TextureFormat),
+}
+
+impl Kind {
+    pub fn entry(self, binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+        match self {
+            Kind::Uniform => uniform_entry(binding, visibility),
+            Kind::Storage => storage_entry(binding, visibility, true),
+            Kind::StorageRw => storage_entry(binding, visibility, false),
+            Kind::Texture => texture_entry(binding, visibility, wgpu::TextureViewDimension::D2),
+            Kind::TextureArray => texture_entry(binding, visibility, wgpu::TextureViewDimension::D2Array),
+            Kind::StorageTexture(format) => {
+                wgpu::BindGroupLayoutEntry { visibility, ..storage_texture_entry(binding, format) }
+            }
+        }
+    }
+}
+
+/// Declares a pass's bind group once: a struct with one field per binding, in binding order and
+/// named as the WGSL variable, with the layout and the bind group built from that one list (a
+/// test checks the names and kinds against the WGSL, `render::binding_tests`).
+macro_rules! bindings {
+    ($(#[$doc:meta])* $name:ident { $($field:ident: $kind:expr),* $(,)? }) => {
+        $(#[$doc])*
+        pub struct $name<'a> {
+            $(pub $field: wgpu::BindingResource<'a>,)*
+        }
+
+        impl $name<'_> {
+            /// The WGSL variable name and kind of each binding, in binding order.
+            pub const SLOTS: &'static [(&'static str, $crate::render::util::Kind)] = &[$((stringify!($field), $kind)),*];
+
+            /// The bind-group layout, every binding visible to `visibility`.
+            pub fn layout(device: &wgpu::Device, label: &str, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayout {
+                let entries: Vec<wgpu::BindGroupLayoutEntry> =
+                    Self::SLOTS.iter().enumerate().map(|(i, (_, kind))| kind.entry(i as u32, visibility)).collect();
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+            }
+
+            pub fn bind(self, device: &wgpu::Device, label: &str, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+                let resources = [$(self.$field),*];
+                let entries: Vec<wgpu::BindGroupEntry> = resources
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, resource)| wgpu::BindGroupEntry { binding: i as u32, resource })
+                    .collect();
+                device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+            }
+        }
+    };
+}
+pub(crate) use bindings;
 
 pub fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {

@@ -9,35 +9,69 @@
 //! Crossings of shared edges are computed in a canonical vertex order, which makes the sampling
 //! watertight: no light ray slips between two triangles that share an edge or a vertex.
 
-use super::util::{storage_entry, uniform_entry};
+use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+bindings! {
+    /// Voxelize's bind group for one chunk of triangles (voxelize.wgsl).
+    VoxelizeBindings {
+        f: Kind::Uniform,
+        tris: Kind::Storage,
+        grid: Kind::StorageRw,
+        records: Kind::Storage,
+        offsets: Kind::Storage,
+        blocks: Kind::Storage,
+        counters: Kind::Storage,
+    }
+}
+
 pub struct Voxelize {
     pipelines: SpecialisedCompute<1>,
-    pub layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+    /// One per chunk of triangles.
+    bind_groups: Vec<wgpu::BindGroup>,
 }
 
 impl Voxelize {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Voxelize, GpuError> {
         let module = lib.module(device, "voxelize.wgsl")?;
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Voxelize::layout"),
-            entries: &[
-                uniform_entry(0, c),
-                storage_entry(1, c, true),  // triangles (this chunk)
-                storage_entry(2, c, false), // grid bits
-                storage_entry(3, c, true),  // Cull: records
-                storage_entry(4, c, true),  // Cull: offsets
-                storage_entry(5, c, true),  // Cull: block offsets
-                storage_entry(6, c, true),  // Cull: counters
-            ],
-        });
+        let layout = VoxelizeBindings::layout(device, "Voxelize::layout", wgpu::ShaderStages::COMPUTE);
         Ok(Voxelize {
             pipelines: SpecialisedCompute::new(device, "Voxelize", module, &layout, ["main"], Specialised::Light),
             layout,
+            bind_groups: Vec::new(),
         })
+    }
+
+    /// (Re)binds the scene's chunks and the grid; called when either changes.
+    pub fn bind(
+        &mut self,
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        geometry: &super::SceneGpu,
+        grid: &wgpu::Buffer,
+        cull: &super::Cull,
+    ) {
+        let l = &geometry.lists;
+        self.bind_groups = geometry
+            .chunks
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .enumerate()
+            .map(|(i, (tris, _))| {
+                let b = VoxelizeBindings {
+                    f: frame.as_entire_binding(),
+                    tris: tris.as_entire_binding(),
+                    grid: grid.as_entire_binding(),
+                    records: l.records.as_entire_binding(),
+                    offsets: l.offsets.as_entire_binding(),
+                    blocks: l.blocks.as_entire_binding(),
+                    counters: cull.counters.as_entire_binding(),
+                };
+                b.bind(device, &format!("Voxelize::bind_group[{i}]"), &self.layout)
+            })
+            .collect();
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -45,17 +79,11 @@ impl Voxelize {
         self.pipelines.prepare(device, variant);
     }
 
-    /// One thread per work item; `dispatch` holds the Cull pass's indirect arguments (Voxelize's
-    /// at [`super::Cull::VOXELIZE_ARGS`]).
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        variant: Variant,
-        bind_group: &wgpu::BindGroup,
-        dispatch: &wgpu::Buffer,
-    ) {
-        // Renderer::render_frame prepares every variant it records.
-        let Some([pipeline]) = self.pipelines.get(variant) else {
+    /// One thread per work item of chunk `chunk`; `dispatch` holds the Cull pass's indirect
+    /// arguments (Voxelize's at [`super::Cull::VOXELIZE_ARGS`]).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, chunk: usize, dispatch: &wgpu::Buffer) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([pipeline]), Some(bind_group)) = (self.pipelines.get(variant), self.bind_groups.get(chunk)) else {
             return;
         };
         let mut pass = encoder

@@ -62,8 +62,11 @@ pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
 /// Lines from the renderer's own account of what it kept and dropped.
 pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
     let unit = if point_light { "°" } else { " unit" };
-    let mut v = vec![format!("passes: {}", p.passes.join(" › ")), format!("shaders specialised to: {}", p.variant)];
-    if !p.passes.contains(&"voxelize") {
+    let mut v = vec![
+        format!("passes: {}", p.passes.iter().map(|p| p.label()).collect::<Vec<_>>().join(" › ")),
+        format!("shaders specialised to: {}", p.variant),
+    ];
+    if !p.passes.contains(&crate::render::Pass::Voxelize) {
         v.push("no grid this frame".into());
         return v;
     }
@@ -114,7 +117,7 @@ impl StatsPanel {
         } else {
             egui::Grid::new("stats-passes").num_columns(2).striped(true).show(ui, |ui| {
                 for t in &info.timings {
-                    ui.label(t.pass);
+                    ui.label(t.pass.label());
                     ui.label(format!("{:8.3} ms", t.ms));
                     ui.end_row();
                 }

@@ -1,0 +1,61 @@
+// shadow_lookup.wgsl: where a world point falls in the shadow map, shared by Surface (2x2 filtered,
+// slope-biased) and Raymarch (one nearest texel per step).
+//
+// The importing file declares `f: Frame`, `shadow: ShadowFaces` and `shadow_map:
+// texture_2d_array<f32>`. The map stores, per texel, the distance from the light to the nearest
+// surface (point light: |P - L| in a cube of six faces) or from a plane far on the light's side
+// (directional: one orthographic layer); a point is lit when its own value is within a bias of the
+// stored one.
+
+// ShadowUniforms in shadow_map.rs (a layout test checks it).
+struct ShadowFaces {
+    view_proj: array<mat4x4f, 6>,
+    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
+    // z: informational (the light type is the POINT_LIGHT override).
+    params: vec4f,
+    // Directional: the reference point far on the light's side.
+    origin: vec4f,
+}
+
+// Cube face of a direction, in the order +x -x +y -y +z -z (as shadow_map.rs renders them).
+fn cube_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) { return select(1u, 0u, d.x > 0.0); }
+    if (a.y >= a.z) { return select(3u, 2u, d.y > 0.0); }
+    return select(5u, 4u, d.z > 0.0);
+}
+
+struct ShadowCoords {
+    // The map layer (cube face) and the continuous texel coordinates (texel i spans [i, i + 1)).
+    layer: u32,
+    uv: vec2f,
+    // The point's own distance, to compare with the stored one.
+    value: f32,
+    // False outside the map: the map covers every caster but backdrops (Scene::core_bounds), so a
+    // point projecting outside it can only be shadowed by a backdrop, which lies under everything.
+    inside: bool,
+}
+
+fn shadow_coords(p: vec3f) -> ShadowCoords {
+    var s = ShadowCoords(0u, vec2f(0.0), 0.0, false);
+    if (POINT_LIGHT) {
+        let d = p - f.light.xyz;
+        s.layer = cube_face(d);
+        s.value = length(d);
+    } else {
+        s.value = dot(shadow.origin.xyz - p, f.light.xyz);
+    }
+    let clip = shadow.view_proj[s.layer] * vec4f(p, 1.0);
+    if (clip.w <= 0.0) { return s; }
+    let ndc = clip.xy / clip.w;
+    if (any(abs(ndc) > vec2f(1.0))) { return s; }
+    s.uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow.params.x;
+    s.inside = true;
+    return s;
+}
+
+// The stored distance of texel c (clamped into the map) of a layer.
+fn shadow_stored(layer: u32, c: vec2f) -> f32 {
+    let n = shadow.params.x;
+    return textureLoad(shadow_map, vec2i(clamp(c, vec2f(0.0), vec2f(n - 1.0))), i32(layer), 0).x;
+}
