@@ -167,7 +167,7 @@ fn cumulative(r: Ray, z: f32) -> vec3f {
 // sum_j C(z_j) (q_{j-1} - q_j) over one plane's two grid rays `bases` blended with `weights`;
 // bin j of the plane spans [z(j + offset), z(j + 1 + offset)] around its sample (bin_offset), the
 // first and the last extended to z(-1/4) and z(B + 1/4).
-fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32) -> vec3f {
+fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32, last: u32) -> vec3f {
     var sum = vec3f(0.0);
     // q before the first bin is 0 (the stretch below the bins is added apart), which the bits see
     // as a set bit before bin 0: carry starts at 1.
@@ -179,7 +179,8 @@ fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32) -> vec3f {
         carry = vec2u(grid[bases.x + first - 1u], grid[bases.y + first - 1u]) >> vec2u(31u);
         q_prev = dot(weights, vec2f(1u - carry));
     }
-    for (var w = first; w < f.grid.w; w++) {
+    // Words past `last` hold bins beyond z_end only: the end term below covers them.
+    for (var w = first; w <= last; w++) {
         let b = vec2u(grid[bases.x + w], grid[bases.y + w]);
         // Where a ray's bit differs from the one before it (bit 0 against the previous word's last).
         var changes = (b.x ^ ((b.x << 1u) | carry.x)) | (b.y ^ ((b.y << 1u) | carry.y));
@@ -201,21 +202,31 @@ fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32) -> vec3f {
             q_prev = q;
         }
     }
-    // The boundary after the last bin.
+    // The boundary after the last bin (C clamps it to z_end when the ray ends first).
     return sum + cumulative(r, z_of_bin(f, f32(f.grid.z) + 0.25)) * q_prev;
 }
 
 // The lit part of the view ray: the stretches before and after the bins' range (no caster reaches
 // them), and both planes around the pixel.
 fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
+    // The words holding bins of [z_start, z_end] on either plane (offsets of -1/4 and +1/4 bin).
+    let top = f32(f.grid.z - 1u);
+    let first = u32(clamp(floor(bin_coord(f, r.z_start) - 0.25), 0.0, top)) / 32u;
+    let last = u32(clamp(floor(bin_coord(f, r.z_end) + 0.25), 0.0, top)) / 32u;
+    // Most rays cross no shadow at all: when no bit is set there, the whole ray is lit.
+    var any = 0u;
+    for (var w = first; w <= last; w++) {
+        any |= grid[bases.x + w] | grid[bases.y + w] | grid[bases.z + w] | grid[bases.w + w];
+    }
+    if (any == 0u) { return cumulative(r, r.z_end); }
     var sum = vec3f(0.0);
     // Both planes' bins span [z(-1/4), z(B + 1/4)] (lit_plane).
     let z_lo = z_of_bin(f, -0.25);
     let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
     if (r.z_start < z_lo) { sum += cumulative(r, z_lo); }
     if (r.z_end > z_hi) { sum += cumulative(r, r.z_end) - cumulative(r, z_hi); }
-    if (weights.x + weights.z > 0.0) { sum += lit_plane(r, bases.xz, weights.xz, bin_offset(x.x)); }
-    if (weights.y + weights.w > 0.0) { sum += lit_plane(r, bases.yw, weights.yw, bin_offset(x.y)); }
+    if (weights.x + weights.z > 0.0) { sum += lit_plane(r, bases.xz, weights.xz, bin_offset(x.x), last); }
+    if (weights.y + weights.w > 0.0) { sum += lit_plane(r, bases.yw, weights.yw, bin_offset(x.y), last); }
     return sum;
 }
 

@@ -7,7 +7,7 @@
 //   [z_lo, z_hi] = [casters' z_lo, min(casters' z_hi, max over pixels of z_s)]
 //
 // `reduce` takes that maximum with an atomic max on the float's bits (non-negative floats order
-// like their bit patterns); `finish` clamps it into the casters' range. The renderer then copies
+// like their bit patterns), first per workgroup; `finish` clamps it into the casters' range. The renderer then copies
 // the result into the frame uniforms' `ranges.zw` before the voxelizer runs, with no CPU round trip.
 
 #import common
@@ -37,11 +37,18 @@ fn visible_z(p: vec2u) -> f32 {
     return max(t, 0.0) * sin(gamma);
 }
 
+var<workgroup> group_max: atomic<u32>;
+
+// One atomic per workgroup on the result: 64 per pixel block on one address serialise badly.
 @compute @workgroup_size(8, 8)
-fn reduce(@builtin(global_invocation_id) id: vec3u) {
-    if (id.x >= f.image.x || id.y >= f.image.y) { return; }
-    let z = max(visible_z(id.xy), 0.0);
-    atomicMax(&out[0], bitcast<u32>(z));
+fn reduce(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) { atomicStore(&group_max, 0u); }
+    workgroupBarrier();
+    if (id.x < f.image.x && id.y < f.image.y) {
+        atomicMax(&group_max, bitcast<u32>(max(visible_z(id.xy), 0.0)));
+    }
+    workgroupBarrier();
+    if (lid == 0u) { atomicMax(&out[0], atomicLoad(&group_max)); }
 }
 
 @compute @workgroup_size(1)
