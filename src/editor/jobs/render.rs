@@ -1,0 +1,378 @@
+//! The render job: a worker thread with its own wgpu device renders the newest request and hands
+//! finished pictures to the UI thread, which never waits for a frame.
+//!
+//! - **Own device.** On the software driver every device has its own queue, executed by its own
+//!   threads, so the window's frames are never queued behind a render that takes seconds
+//!   (docs/editor.md has the measurements that decided this). Without a second device the worker
+//!   renders on the window's.
+//! - **Coalescing.** A request replaces the one waiting: the worker always takes the newest, so
+//!   no queue of stale frames builds up during a drag.
+//! - **Progressive.** A frame predicted to take longer than [`PREVIEW_BUDGET_MS`] is preceded by a
+//!   preview with fewer pixels and a coarser grid (same method), sized from the measured times of
+//!   recent frames ([`FrameTimes`]); the full frame follows once the request is no longer
+//!   interactive (the pointer is up).
+//! - **Reload** compiles the changed shaders here, not on the UI thread; the last good picture
+//!   stays on screen meanwhile.
+//!
+//! Each delivery wakes the UI (`request_repaint`).
+
+pub use super::frame::{
+    DeviceInfo, FrameFailure, FrameRequest, ImageStats, Picture, Quality, RenderEvent, INSPECT_LIMIT,
+};
+use super::progressive::{scaled, work_units, FrameTimes, PREVIEW_BUDGET_MS};
+use crate::editor::display::{DisplayImages, DisplayPipeline};
+use crate::editor::panels::inspector::GridSnapshot;
+use crate::editor::panels::GridLimits;
+use crate::gpu::{GpuContext, ShaderLibrary};
+use crate::render::{Method, Renderer};
+use crate::scene::Scene;
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+/// A one-off job, done before the next frame.
+enum Task {
+    Reload(ShaderLibrary),
+    Capture { id: u64, scene: Arc<Scene>, scene_generation: u64, width: u32, height: u32, method: Method },
+}
+
+#[derive(Default)]
+struct Slot {
+    frame: Option<FrameRequest>,
+    tasks: VecDeque<Task>,
+    quit: bool,
+}
+
+#[derive(Default)]
+struct Shared {
+    slot: Mutex<Slot>,
+    wake: Condvar,
+    busy: AtomicBool,
+}
+
+/// How the worker is set up (tests and measurements).
+#[derive(Debug, Clone, Default)]
+pub struct WorkerOptions {
+    /// Render on the window's device instead of a second one (to measure the difference).
+    pub shared_device: bool,
+    /// Sleep this long before each frame (tests: a slow GPU on any machine).
+    pub frame_delay: Option<Duration>,
+}
+
+/// What the worker needs from the window: its device (the pictures' textures live there), the
+/// display shader's layout and the target format.
+pub struct Window {
+    pub gpu: GpuContext,
+    pub layout: wgpu::BindGroupLayout,
+    pub format: wgpu::TextureFormat,
+}
+
+/// The UI's handle on the worker.
+pub struct RenderJob {
+    shared: Arc<Shared>,
+    rx: mpsc::Receiver<RenderEvent>,
+}
+
+impl RenderJob {
+    /// Starts the worker. `wake` is called after every delivery (to repaint the UI).
+    pub fn start(
+        window: Window,
+        lib: ShaderLibrary,
+        opts: WorkerOptions,
+        wake: impl Fn() + Send + 'static,
+    ) -> std::io::Result<RenderJob> {
+        let shared = Arc::new(Shared::default());
+        let (tx, rx) = mpsc::channel();
+        let s2 = shared.clone();
+        std::thread::Builder::new().name("epivox-render".into()).spawn(move || {
+            let send = |e: RenderEvent| {
+                let _ = tx.send(e);
+                wake();
+            };
+            if let Some(mut w) = Worker::open(window, &lib, opts, &send) {
+                w.run(&s2, &send);
+            }
+        })?;
+        Ok(RenderJob { shared, rx })
+    }
+
+    fn with_slot(&self, f: impl FnOnce(&mut Slot)) {
+        // A poisoned lock means the worker panicked: nothing more will render; say nothing here
+        // (the UI keeps its last picture).
+        if let Ok(mut s) = self.shared.slot.lock() {
+            f(&mut s);
+            self.shared.wake.notify_one();
+        }
+    }
+
+    /// Replaces the waiting request (if any) with `r`.
+    pub fn submit(&self, r: FrameRequest) {
+        self.with_slot(|s| s.frame = Some(r));
+    }
+
+    /// Rebuilds every pipeline from `lib` before the next frame.
+    pub fn reload(&self, lib: ShaderLibrary) {
+        self.with_slot(|s| s.tasks.push_back(Task::Reload(lib)));
+    }
+
+    /// Renders `scene` at `width x height` and reads both images back (the accuracy check).
+    pub fn capture(&self, id: u64, scene: Arc<Scene>, scene_generation: u64, width: u32, height: u32, method: Method) {
+        self.with_slot(|s| s.tasks.push_back(Task::Capture { id, scene, scene_generation, width, height, method }));
+    }
+
+    /// Everything delivered since the last call.
+    pub fn poll(&self) -> Vec<RenderEvent> {
+        self.rx.try_iter().collect()
+    }
+
+    /// A frame or task is being worked on or waiting.
+    pub fn in_flight(&self) -> bool {
+        self.shared.busy.load(Ordering::SeqCst)
+            || self.shared.slot.lock().map(|s| s.frame.is_some() || !s.tasks.is_empty()).unwrap_or(false)
+    }
+}
+
+impl Drop for RenderJob {
+    fn drop(&mut self) {
+        // The worker ends after what it is doing; nobody waits for it.
+        self.with_slot(|s| s.quit = true);
+    }
+}
+
+enum Job {
+    Task(Task),
+    Frame(FrameRequest),
+}
+
+struct Worker {
+    renderer: Renderer,
+    window: Window,
+    opts: WorkerOptions,
+    times: FrameTimes,
+    /// The last generation delivered, and whether at full quality.
+    delivered: Option<(u64, bool)>,
+    /// The scene with the current look written in, per scene generation.
+    scene: Option<(u64, Scene)>,
+    keep_geometry: bool,
+}
+
+impl Worker {
+    fn open(window: Window, lib: &ShaderLibrary, opts: WorkerOptions, send: &dyn Fn(RenderEvent)) -> Option<Worker> {
+        let (gpu, shared_queue) = if opts.shared_device {
+            (window.gpu.clone(), true)
+        } else {
+            match GpuContext::headless() {
+                Ok(g) => (g, false),
+                Err(e) => {
+                    log::warn!("no second GPU device ({e}); rendering on the window's");
+                    (window.gpu.clone(), true)
+                }
+            }
+        };
+        let (renderer, startup_error) = match Renderer::new(gpu.clone(), lib) {
+            Ok(r) => (r, None),
+            // Broken shaders on disk at start-up: run on the embedded copies and say why, so the
+            // editor opens and picks the folder up again once the file is fixed.
+            Err(e) if lib.dir().is_some() => match Renderer::new(gpu.clone(), &ShaderLibrary::embedded()) {
+                Ok(r) => (r, Some(e.to_string())),
+                Err(e) => {
+                    send(RenderEvent::Started(Err(e.to_string())));
+                    return None;
+                }
+            },
+            Err(e) => {
+                send(RenderEvent::Started(Err(e.to_string())));
+                return None;
+            }
+        };
+        let l = gpu.device.limits();
+        let software = gpu.info.device_type == wgpu::DeviceType::Cpu;
+        send(RenderEvent::Started(Ok(DeviceInfo {
+            adapter: gpu.adapter_name(),
+            software,
+            timestamps: gpu.timestamps,
+            limits: GridLimits {
+                buffer_bytes: l.max_storage_buffer_binding_size.min(l.max_buffer_size),
+                texture_side: l.max_texture_dimension_2d,
+            },
+            shared_queue,
+            startup_error,
+        })));
+        Some(Worker {
+            renderer,
+            window,
+            opts,
+            times: FrameTimes::new(software),
+            delivered: None,
+            scene: None,
+            keep_geometry: false,
+        })
+    }
+
+    fn next(shared: &Shared) -> Option<Job> {
+        let mut s = shared.slot.lock().ok()?;
+        loop {
+            if s.quit {
+                return None;
+            }
+            if let Some(t) = s.tasks.pop_front() {
+                shared.busy.store(true, Ordering::SeqCst);
+                return Some(Job::Task(t));
+            }
+            if let Some(r) = s.frame.take() {
+                shared.busy.store(true, Ordering::SeqCst);
+                return Some(Job::Frame(r));
+            }
+            s = shared.wake.wait(s).ok()?;
+        }
+    }
+
+    fn run(&mut self, shared: &Shared, send: &dyn Fn(RenderEvent)) {
+        while let Some(job) = Self::next(shared) {
+            match job {
+                Job::Task(Task::Reload(lib)) => send(RenderEvent::Reloaded(self.reload(&lib))),
+                Job::Task(Task::Capture { id, scene, scene_generation, width, height, method }) => {
+                    self.upload_scene(&scene, scene_generation);
+                    self.set_keep_geometry(false);
+                    let out = self.renderer.render(&scene, width, height, method).map_err(|e| e.to_string());
+                    send(RenderEvent::Captured(id, out.map(|o| (o.scatter, o.hdr))));
+                }
+                Job::Frame(r) => {
+                    if let Some(again) = self.frame(&r, send) {
+                        // Refine: unless a newer request arrived meanwhile, this one comes back
+                        // for its full frame.
+                        if let Ok(mut s) = shared.slot.lock() {
+                            s.frame.get_or_insert(again);
+                        }
+                    }
+                }
+            }
+            shared.busy.store(false, Ordering::SeqCst);
+        }
+    }
+
+    fn reload(&mut self, lib: &ShaderLibrary) -> Result<(DisplayPipeline, f64), String> {
+        let t0 = Instant::now();
+        // Both are built before either is swapped, so a broken display.wgsl leaves all as it was.
+        let display = DisplayPipeline::new(&self.window.gpu, lib, &self.window.layout, self.window.format)
+            .map_err(|e| e.to_string())?;
+        self.renderer.reload(lib).map_err(|e| e.to_string())?;
+        // The new shaders may draw differently: the next request renders even if already drawn.
+        self.delivered = None;
+        Ok((display, t0.elapsed().as_secs_f64() * 1e3))
+    }
+
+    fn upload_scene(&mut self, scene: &Arc<Scene>, generation: u64) {
+        if self.scene.as_ref().is_none_or(|(g, _)| *g != generation) {
+            self.renderer.set_scene(scene);
+            self.scene = Some((generation, (**scene).clone()));
+        }
+    }
+
+    fn set_keep_geometry(&mut self, keep: bool) {
+        if keep != self.keep_geometry {
+            self.renderer.set_keep_geometry_grid(keep);
+            self.keep_geometry = keep;
+        }
+    }
+
+    /// Renders what `r` still needs; returns it when a full frame should follow its preview.
+    fn frame(&mut self, r: &FrameRequest, send: &dyn Fn(RenderEvent)) -> Option<FrameRequest> {
+        let done = self.delivered.filter(|(g, _)| *g == r.generation).map(|(_, full)| full);
+        if done == Some(true) || (done == Some(false) && r.interactive) {
+            return None;
+        }
+        let units = work_units(r.width, r.height, r.look.grid, r.method);
+        if done.is_none() && r.progressive && self.times.wants_preview(r.method, units, PREVIEW_BUDGET_MS) {
+            let s = self.times.preview_scale(r.method, units, PREVIEW_BUDGET_MS);
+            let delivered = self.render(r, Quality::Preview(s), send);
+            return (delivered && !r.interactive).then(|| r.clone());
+        }
+        self.render(r, Quality::Full, send);
+        None
+    }
+
+    /// Renders `r` at `quality` and delivers it; false when it failed.
+    fn render(&mut self, r: &FrameRequest, quality: Quality, send: &dyn Fn(RenderEvent)) -> bool {
+        let t0 = Instant::now();
+        if let Some(d) = self.opts.frame_delay {
+            std::thread::sleep(d);
+        }
+        self.upload_scene(&r.scene, r.scene_generation);
+        let (width, height, grid) = match quality {
+            Quality::Full => (r.width, r.height, r.look.grid),
+            Quality::Preview(s) => scaled(r.width, r.height, r.look.grid, s),
+        };
+        let keep = quality.is_full()
+            && r.grids
+            && !matches!(r.method, Method::Raymarch { .. })
+            && r.look.grid.bytes() <= INSPECT_LIMIT;
+        self.set_keep_geometry(keep);
+        let Some((_, scene)) = self.scene.as_mut() else { return false };
+        r.look.apply_to(scene);
+        scene.grid = grid;
+        if r.surface_only {
+            scene.medium.density = 0.0;
+        }
+        let fail = |error: String| {
+            send(RenderEvent::Frame(Err(FrameFailure { generation: r.generation, error })));
+        };
+        if let Err(e) = self.renderer.set_shadow_map_size(r.shadow_map) {
+            self.delivered = Some((r.generation, true));
+            fail(e.to_string());
+            return false;
+        }
+        let out = match self.renderer.render(&*scene, width, height, r.method) {
+            Ok(o) => o,
+            Err(e) => {
+                // Not retried at full quality: the same look fails the same way.
+                self.delivered = Some((r.generation, true));
+                fail(e.to_string());
+                return false;
+            }
+        };
+        let render_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let info = out.info();
+        let prune = self.renderer.prune_report(&info).ok();
+        let grids = if keep {
+            self.renderer.read_grid().ok().map(|shadow| {
+                Arc::new(GridSnapshot {
+                    generation: r.generation,
+                    grid,
+                    setup: info.setup,
+                    camera: r.look.camera,
+                    shadow,
+                    geometry: self.renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4),
+                })
+            })
+        } else {
+            None
+        };
+        let stats = ImageStats::of(&out.hdr, &out.scatter);
+        let display = Arc::new(DisplayImages::upload(&self.window.gpu, &self.window.layout, &out.hdr, &out.scatter));
+        let total_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.times.record(r.method, work_units(width, height, grid, r.method), total_ms);
+        self.delivered = Some((r.generation, quality.is_full()));
+        send(RenderEvent::Frame(Ok(Arc::new(Picture {
+            generation: r.generation,
+            quality,
+            width,
+            height,
+            grid,
+            method: r.method,
+            look: r.look,
+            camera: r.look.camera,
+            info,
+            prune,
+            render_ms,
+            total_ms,
+            stats,
+            hdr: out.hdr,
+            scatter: out.scatter,
+            display,
+            grids,
+        }))));
+        true
+    }
+}
