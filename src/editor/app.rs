@@ -190,8 +190,14 @@ impl Editor {
             });
         });
         egui::CentralPanel::default().show(ui, |ui| {
-            p.toolbar.show(ui, &cx, cmds);
-            let area = ui.available_rect_before_wrap();
+            // The panel's width before the toolbar: a wide toolbar row must not widen the viewport
+            // (a resize renders again).
+            let full = ui.available_rect_before_wrap();
+            ui.scope_builder(egui::UiBuilder::new().max_rect(full), |ui| {
+                ui.set_clip_rect(full);
+                p.toolbar.show(ui, &cx, cmds);
+            });
+            let area = egui::Rect::from_min_max(egui::pos2(full.left(), ui.cursor().min.y), full.max);
             let (view_rect, insp_rect) = if cx.view.inspector.visible {
                 let split = area.left() + area.width() * 0.6;
                 (
@@ -205,6 +211,8 @@ impl Editor {
             p.viewport.show(&mut vui, &cx, cmds);
             if let Some(r) = insp_rect {
                 let mut iui = ui.new_child(egui::UiBuilder::new().max_rect(r).id_salt("epivox-inspector"));
+                // The pictures are sized to this rectangle even if a row of controls overflows it.
+                iui.set_clip_rect(r);
                 p.inspector.show(&mut iui, &cx, cmds);
             }
             ui.advance_cursor_after_rect(area);

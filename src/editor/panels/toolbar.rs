@@ -40,7 +40,9 @@ impl Panel for Toolbar {
 
     fn show(&mut self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, out: &mut Vec<Command>) {
         let view = cx.view;
-        ui.horizontal_wrapped(|ui| {
+        // Two fixed rows (not wrapped): the viewport below keeps its size whatever the toolbar
+        // shows (a resize would render again).
+        ui.horizontal(|ui| {
             for (mode, label) in ViewMode::ALL {
                 if ui.selectable_label(view.mode == mode, label).clicked() && view.mode != mode {
                     out.push(Command::SetView(mode));
@@ -48,17 +50,20 @@ impl Panel for Toolbar {
             }
             ui.separator();
             self.method(ui, cx, out);
-            ui.separator();
+        });
+        ui.horizontal(|ui| {
             self.exposure(ui, cx, out);
             ui.separator();
             let mut scale = view.render_scale;
-            egui::ComboBox::new("render-scale", "render")
+            egui::ComboBox::new("render-scale", "")
                 .selected_text(format!("{}% pixels", (scale * 100.0).round()))
                 .show_ui(ui, |ui| {
                     for s in [1.0f32, 0.75, 0.5, 0.25] {
                         ui.selectable_value(&mut scale, s, format!("{}% pixels", (s * 100.0).round()));
                     }
-                });
+                })
+                .response
+                .on_hover_text("The share of the viewport's pixels a full-quality frame renders");
             if scale != view.render_scale {
                 out.push(Command::SetRenderScale(scale));
             }

@@ -187,7 +187,10 @@ impl InspectorPanel {
         let g = s.grid;
         // Both pictures have the rays down. Side by side they share that axis; in a narrow column
         // they are stacked instead. Take whichever layout shows the grid picture larger.
-        let avail = ui.available_size();
+        // The room left in the column (its clip rectangle: a wide row of controls can stretch the
+        // ui's own rectangle, and the pictures would then change size from frame to frame).
+        let clip = ui.clip_rect();
+        let avail = egui::vec2(clip.right() - ui.cursor().left(), clip.bottom() - ui.cursor().top());
         let size =
             |img: &Option<egui::ColorImage>| img.as_ref().map(|i| egui::vec2(i.size[0] as f32, i.size[1] as f32));
         let gs = size(&self.grid_img).unwrap_or(egui::vec2(1.0, 1.0));
