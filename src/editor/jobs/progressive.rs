@@ -16,7 +16,7 @@ pub const PREVIEW_BUDGET_MS: f64 = 120.0;
 
 /// The preview scales tried, largest first (steps of sqrt(2), so sizes stay stable while the
 /// estimate moves a little).
-pub const LEVELS: [f32; 7] = [0.707, 0.5, 0.354, 0.25, 0.177, 0.125, 0.088];
+pub const LEVELS: [f32; 9] = [0.707, 0.5, 0.354, 0.25, 0.177, 0.125, 0.088, 0.0625, 0.044];
 
 /// The work of a frame in the model's units.
 pub fn work_units(width: u32, height: u32, grid: Grid, method: Method) -> f64 {
@@ -28,9 +28,17 @@ pub fn work_units(width: u32, height: u32, grid: Grid, method: Method) -> f64 {
     }
 }
 
-/// The frame at preview scale `s`: fewer pixels and a coarser grid, within the grid's ranges.
+/// The pixels' scale at grid scale `s`: the pixels cost far less than the grid (for VSV), so they
+/// are cut less — at most to half the side, never below the grid's scale.
+pub fn pixel_scale(s: f32) -> f32 {
+    (2.0 * s).min(0.5).max(s)
+}
+
+/// The frame at preview level `s`: a grid with `s` times the planes, rays and bins, and
+/// [`pixel_scale`]`(s)` times the pixels per side, within the grid's ranges.
 pub fn scaled(width: u32, height: u32, grid: Grid, s: f32) -> (u32, u32, Grid) {
-    let px = |v: u32| ((v as f32 * s).round() as u32).max(8);
+    let sp = pixel_scale(s);
+    let px = |v: u32| ((v as f32 * sp).round() as u32).clamp(8.min(v), v);
     let cells = |v: u32, min: f64| ((v as f32 * s).round() as u32).max(min as u32).min(v);
     // Bins in whole words, at least one.
     let bins = (((grid.bins as f32 * s) / 32.0).round() as u32).max(1) * 32;
@@ -100,13 +108,17 @@ impl FrameTimes {
         k[k.len() / 2] * prior(units)
     }
 
-    /// The largest preview scale predicted to fit `budget_ms`, or the smallest level when none does.
-    pub fn preview_scale(&self, method: Method, full_units: f64, budget_ms: f64) -> f32 {
+    /// The largest preview level predicted to fit `budget_ms` for a full frame of `width x height`
+    /// with `grid`, or the smallest level when none does.
+    pub fn preview_scale(&self, width: u32, height: u32, grid: Grid, method: Method, budget_ms: f64) -> f32 {
         let smallest = LEVELS[LEVELS.len() - 1];
         LEVELS
             .iter()
             .copied()
-            .find(|s| self.predict(method, full_units * (*s as f64).powi(2)) <= budget_ms)
+            .find(|s| {
+                let (w, h, g) = scaled(width, height, grid, *s);
+                self.predict(method, work_units(w, h, g, method)) <= budget_ms
+            })
             .unwrap_or(smallest)
     }
 
@@ -134,11 +146,15 @@ mod tests {
             assert!((t.predict(Method::Vsv, u) - truth(u)).abs() < 1.0, "{u}");
         }
         assert!(t.wants_preview(Method::Vsv, full, PREVIEW_BUDGET_MS));
-        let s = t.preview_scale(Method::Vsv, full, PREVIEW_BUDGET_MS) as f64;
-        assert!(truth(full * s * s) <= PREVIEW_BUDGET_MS, "scale {s}");
+        let s = t.preview_scale(640, 480, Grid::default(), Method::Vsv, PREVIEW_BUDGET_MS);
+        let units = |s: f32| {
+            let (w, h, g) = scaled(640, 480, Grid::default(), s);
+            work_units(w, h, g, Method::Vsv)
+        };
+        assert!(truth(units(s)) <= PREVIEW_BUDGET_MS, "scale {s}");
         // The next level up would not have fit.
-        let i = LEVELS.iter().position(|l| *l as f64 == s).unwrap();
-        assert!(i == 0 || truth(full * (LEVELS[i - 1] as f64).powi(2)) > PREVIEW_BUDGET_MS);
+        let i = LEVELS.iter().position(|l| *l == s).unwrap();
+        assert!(i == 0 || truth(units(LEVELS[i - 1])) > PREVIEW_BUDGET_MS);
         // Ray marching is a family of its own: no samples yet, the prior decides.
         assert_eq!(t.predict(Method::Raymarch { steps: 64, jitter: true }, 100.0), 150.0 + 2.4e-3 * 100.0);
     }
@@ -155,9 +171,13 @@ mod tests {
     fn previews_stay_valid_grids() {
         let g = Grid { planes: 100, rays: 20, bins: 64, ..Grid::default() };
         let (w, h, p) = scaled(50, 40, g, 0.125);
-        assert_eq!((w, h), (8, 8));
+        // The pixels are cut less than the grid (to a quarter here), never below 8.
+        assert_eq!((w, h), (13, 10));
         assert!(p.validate().is_ok(), "{p}");
         assert_eq!((p.planes, p.rays, p.bins), (13, 8, 32));
+        assert_eq!(scaled(50, 40, g, 0.044).0, 8);
+        assert_eq!(pixel_scale(0.707), 0.707);
+        assert_eq!(pixel_scale(0.354), 0.5);
         let (_, _, same) = scaled(50, 40, g, 1.0);
         assert_eq!(same, g);
     }

@@ -145,8 +145,69 @@ enum Job {
     Frame(FrameRequest),
 }
 
-struct Worker {
+/// Shadow-map texels per side of the preview renderer (coarser shadows of surfaces, like the rest
+/// of a preview).
+const PREVIEW_SHADOW_MAP: u32 = 512;
+
+/// Lowers the calling thread's priority by 10 (at most to 19). Threads it starts inherit it — the
+/// software driver's, created with the worker's device — so on a CPU shared with the driver the
+/// UI thread comes first and the renderer takes the rest.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: plain system calls on the calling thread (on Linux `who = 0` with PRIO_PROCESS is
+    // the calling thread; the nice value is per thread). getpriority returns -1 both as a value
+    // and on error: either way the result below is a valid nice value.
+    unsafe {
+        let now = libc::getpriority(libc::PRIO_PROCESS, 0);
+        libc::setpriority(libc::PRIO_PROCESS, 0, (now + 10).min(19));
+    }
+}
+
+/// A renderer and what it was given.
+struct Lane {
     renderer: Renderer,
+    scene_generation: Option<u64>,
+    keep_geometry: bool,
+    /// Shaders it still has to be rebuilt from (a reload reaches the full-quality renderer when it
+    /// is next needed, after the preview has shown the new shaders).
+    stale: Option<ShaderLibrary>,
+}
+
+impl Lane {
+    fn new(gpu: &GpuContext, lib: &ShaderLibrary) -> Result<Lane, crate::gpu::GpuError> {
+        Ok(Lane {
+            renderer: Renderer::new(gpu.clone(), lib)?,
+            scene_generation: None,
+            keep_geometry: false,
+            stale: None,
+        })
+    }
+
+    /// Brings the renderer up to date: pending shaders, the scene's geometry, the geometry grid.
+    fn prepare(&mut self, scene: &Scene, generation: u64, keep_geometry: bool) -> Result<(), String> {
+        if let Some(lib) = self.stale.take() {
+            self.renderer.reload(&lib).map_err(|e| e.to_string())?;
+        }
+        if self.scene_generation != Some(generation) {
+            self.renderer.set_scene(scene);
+            self.scene_generation = Some(generation);
+        }
+        if keep_geometry != self.keep_geometry {
+            self.renderer.set_keep_geometry_grid(keep_geometry);
+            self.keep_geometry = keep_geometry;
+        }
+        Ok(())
+    }
+}
+
+/// The worker: two renderers on its device, one for previews (its sizes and a smaller shadow
+/// map stay allocated between previews) and one for full frames (created on first use).
+struct Worker {
+    gpu: GpuContext,
+    /// The shaders the renderers run (the embedded ones when the folder did not build at start).
+    lib: ShaderLibrary,
+    preview: Lane,
+    full: Option<Lane>,
     window: Window,
     opts: WorkerOptions,
     times: FrameTimes,
@@ -154,11 +215,11 @@ struct Worker {
     delivered: Option<(u64, bool)>,
     /// The scene with the current look written in, per scene generation.
     scene: Option<(u64, Scene)>,
-    keep_geometry: bool,
 }
 
 impl Worker {
     fn open(window: Window, lib: &ShaderLibrary, opts: WorkerOptions, send: &dyn Fn(RenderEvent)) -> Option<Worker> {
+        lower_priority();
         let (gpu, shared_queue) = if opts.shared_device {
             (window.gpu.clone(), true)
         } else {
@@ -170,12 +231,12 @@ impl Worker {
                 }
             }
         };
-        let (renderer, startup_error) = match Renderer::new(gpu.clone(), lib) {
-            Ok(r) => (r, None),
+        let (preview, lib, startup_error) = match Lane::new(&gpu, lib) {
+            Ok(l) => (l, lib.clone(), None),
             // Broken shaders on disk at start-up: run on the embedded copies and say why, so the
             // editor opens and picks the folder up again once the file is fixed.
-            Err(e) if lib.dir().is_some() => match Renderer::new(gpu.clone(), &ShaderLibrary::embedded()) {
-                Ok(r) => (r, Some(e.to_string())),
+            Err(e) if lib.dir().is_some() => match Lane::new(&gpu, &ShaderLibrary::embedded()) {
+                Ok(l) => (l, ShaderLibrary::embedded(), Some(e.to_string())),
                 Err(e) => {
                     send(RenderEvent::Started(Err(e.to_string())));
                     return None;
@@ -200,13 +261,15 @@ impl Worker {
             startup_error,
         })));
         Some(Worker {
-            renderer,
+            gpu,
+            lib,
+            preview,
+            full: None,
             window,
             opts,
             times: FrameTimes::new(software),
             delivered: None,
             scene: None,
-            keep_geometry: false,
         })
     }
 
@@ -233,9 +296,10 @@ impl Worker {
             match job {
                 Job::Task(Task::Reload(lib)) => send(RenderEvent::Reloaded(self.reload(&lib))),
                 Job::Task(Task::Capture { id, scene, scene_generation, width, height, method }) => {
-                    self.upload_scene(&scene, scene_generation);
-                    self.set_keep_geometry(false);
-                    let out = self.renderer.render(&scene, width, height, method).map_err(|e| e.to_string());
+                    let out = self.full_lane().and_then(|lane| {
+                        lane.prepare(&scene, scene_generation, false)?;
+                        lane.renderer.render(&scene, width, height, method).map_err(|e| e.to_string())
+                    });
                     send(RenderEvent::Captured(id, out.map(|o| (o.scatter, o.hdr))));
                 }
                 Job::Frame(r) => {
@@ -252,29 +316,29 @@ impl Worker {
         }
     }
 
+    /// The full-quality renderer, created on first use.
+    fn full_lane(&mut self) -> Result<&mut Lane, String> {
+        if self.full.is_none() {
+            self.full = Some(Lane::new(&self.gpu, &self.lib).map_err(|e| e.to_string())?);
+        }
+        self.full.as_mut().ok_or_else(|| "no renderer".to_string())
+    }
+
+    /// Compiles the changed shaders for the display and the preview renderer now (the new picture
+    /// comes from them first); the full-quality renderer follows before its next frame.
     fn reload(&mut self, lib: &ShaderLibrary) -> Result<(DisplayPipeline, f64), String> {
         let t0 = Instant::now();
-        // Both are built before either is swapped, so a broken display.wgsl leaves all as it was.
+        // Built before anything is swapped, so a broken display.wgsl leaves all as it was.
         let display = DisplayPipeline::new(&self.window.gpu, lib, &self.window.layout, self.window.format)
             .map_err(|e| e.to_string())?;
-        self.renderer.reload(lib).map_err(|e| e.to_string())?;
+        self.preview.renderer.reload(lib).map_err(|e| e.to_string())?;
+        if let Some(full) = &mut self.full {
+            full.stale = Some(lib.clone());
+        }
+        self.lib = lib.clone();
         // The new shaders may draw differently: the next request renders even if already drawn.
         self.delivered = None;
         Ok((display, t0.elapsed().as_secs_f64() * 1e3))
-    }
-
-    fn upload_scene(&mut self, scene: &Arc<Scene>, generation: u64) {
-        if self.scene.as_ref().is_none_or(|(g, _)| *g != generation) {
-            self.renderer.set_scene(scene);
-            self.scene = Some((generation, (**scene).clone()));
-        }
-    }
-
-    fn set_keep_geometry(&mut self, keep: bool) {
-        if keep != self.keep_geometry {
-            self.renderer.set_keep_geometry_grid(keep);
-            self.keep_geometry = keep;
-        }
     }
 
     /// Renders what `r` still needs; returns it when a full frame should follow its preview.
@@ -285,7 +349,7 @@ impl Worker {
         }
         let units = work_units(r.width, r.height, r.look.grid, r.method);
         if done.is_none() && r.progressive && self.times.wants_preview(r.method, units, PREVIEW_BUDGET_MS) {
-            let s = self.times.preview_scale(r.method, units, PREVIEW_BUDGET_MS);
+            let s = self.times.preview_scale(r.width, r.height, r.look.grid, r.method, PREVIEW_BUDGET_MS);
             let delivered = self.render(r, Quality::Preview(s), send);
             return (delivered && !r.interactive).then(|| r.clone());
         }
@@ -299,7 +363,16 @@ impl Worker {
         if let Some(d) = self.opts.frame_delay {
             std::thread::sleep(d);
         }
-        self.upload_scene(&r.scene, r.scene_generation);
+        let fail = |this: &mut Worker, error: String| {
+            // Not retried at full quality: the same look fails the same way.
+            this.delivered = Some((r.generation, true));
+            send(RenderEvent::Frame(Err(FrameFailure { generation: r.generation, error })));
+            false
+        };
+        // The scene with this look, kept between frames (no clone per edit).
+        if self.scene.as_ref().is_none_or(|(g, _)| *g != r.scene_generation) {
+            self.scene = Some((r.scene_generation, (*r.scene).clone()));
+        }
         let (width, height, grid) = match quality {
             Quality::Full => (r.width, r.height, r.look.grid),
             Quality::Preview(s) => scaled(r.width, r.height, r.look.grid, s),
@@ -308,47 +381,47 @@ impl Worker {
             && r.grids
             && !matches!(r.method, Method::Raymarch { .. })
             && r.look.grid.bytes() <= INSPECT_LIMIT;
-        self.set_keep_geometry(keep);
+        if quality.is_full() {
+            if let Err(e) = self.full_lane() {
+                return fail(self, e);
+            }
+        }
+        let (shadow_map, lane) = match (quality, self.full.as_mut()) {
+            (Quality::Full, Some(l)) => (r.shadow_map, l),
+            (Quality::Full, None) => return fail(self, "no renderer".into()),
+            (Quality::Preview(_), _) => (r.shadow_map.min(PREVIEW_SHADOW_MAP), &mut self.preview),
+        };
         let Some((_, scene)) = self.scene.as_mut() else { return false };
         r.look.apply_to(scene);
         scene.grid = grid;
         if r.surface_only {
             scene.medium.density = 0.0;
         }
-        let fail = |error: String| {
-            send(RenderEvent::Frame(Err(FrameFailure { generation: r.generation, error })));
-        };
-        if let Err(e) = self.renderer.set_shadow_map_size(r.shadow_map) {
-            self.delivered = Some((r.generation, true));
-            fail(e.to_string());
-            return false;
+        let scene = &*scene;
+        if let Err(e) = lane.prepare(scene, r.scene_generation, keep) {
+            return fail(self, e);
         }
-        let out = match self.renderer.render(&*scene, width, height, r.method) {
+        if let Err(e) = lane.renderer.set_shadow_map_size(shadow_map) {
+            return fail(self, e.to_string());
+        }
+        let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,
-            Err(e) => {
-                // Not retried at full quality: the same look fails the same way.
-                self.delivered = Some((r.generation, true));
-                fail(e.to_string());
-                return false;
-            }
+            Err(e) => return fail(self, e.to_string()),
         };
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let info = out.info();
-        let prune = self.renderer.prune_report(&info).ok();
-        let grids = if keep {
-            self.renderer.read_grid().ok().map(|shadow| {
-                Arc::new(GridSnapshot {
-                    generation: r.generation,
-                    grid,
-                    setup: info.setup,
-                    camera: r.look.camera,
-                    shadow,
-                    geometry: self.renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4),
-                })
+        let renderer = &lane.renderer;
+        let prune = renderer.prune_report(&info).ok();
+        let grids = keep.then(|| renderer.read_grid().ok()).flatten().map(|shadow| {
+            Arc::new(GridSnapshot {
+                generation: r.generation,
+                grid,
+                setup: info.setup,
+                camera: r.look.camera,
+                shadow,
+                geometry: renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4),
             })
-        } else {
-            None
-        };
+        });
         let stats = ImageStats::of(&out.hdr, &out.scatter);
         let display = Arc::new(DisplayImages::upload(&self.window.gpu, &self.window.layout, &out.hdr, &out.scatter));
         let total_ms = t0.elapsed().as_secs_f64() * 1e3;
