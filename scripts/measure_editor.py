@@ -148,6 +148,22 @@ def main():
         out["viewport_px"] = [vw, vh]
         time.sleep(1.0)
 
+        # --- baseline: the pointer moving over the side panels (hover highlights repaint the
+        # window), nothing rendering: what a UI frame costs on this machine by itself
+        t_a = time.time()
+        while time.time() - t_a < 2.0:
+            f = (time.time() - t_a) / 2.0
+            sh("xdotool", "mousemove", str(wx + 60 + int(200 * f)), str(wy + 150 + int(400 * f)), env=xenv)
+            time.sleep(0.015)
+        t_b = time.time()
+        idle = [l for l in frames(read_trace(trace)) if t_a <= l["t"] <= t_b]
+        out["idle_ui_frames"] = len(idle)
+        out["idle_ui_frame_gap_ms"] = {"p50": pct([l["gap_ms"] for l in idle], 0.5),
+                                       "p95": pct([l["gap_ms"] for l in idle], 0.95)}
+        out["idle_ui_ms_in_editor"] = {"p50": pct([l["ui_ms"] for l in idle], 0.5),
+                                       "p95": pct([l["ui_ms"] for l in idle], 0.95)}
+        time.sleep(0.5)
+
         # --- the drag, with screenshots every 0.1 s
         shots = []
         stop = threading.Event()

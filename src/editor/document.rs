@@ -4,7 +4,7 @@
 
 use super::command::MergeKey;
 use crate::params::{Grid, Light, Medium};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Aabb, Camera, Scene};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -39,6 +39,8 @@ impl Look {
 pub struct Document {
     /// The scene as loaded (its own camera, light, medium and grid; the look overrides them).
     pub scene: Arc<Scene>,
+    /// The scene's bounds (panels and gestures size their steps by it; computed once per scene).
+    pub bounds: Aabb,
     /// Bumped when another scene is opened (the renderer uploads geometry again).
     pub scene_generation: u64,
     pub look: Look,
@@ -49,7 +51,8 @@ pub struct Document {
 impl Document {
     pub fn new(scene: Scene, exposure: f32, preset_path: Option<PathBuf>) -> Document {
         let look = Look::of(&scene, exposure);
-        Document { scene: Arc::new(scene), scene_generation: 1, look, history: History::default(), preset_path }
+        let bounds = scene.bounds();
+        Document { scene: Arc::new(scene), bounds, scene_generation: 1, look, history: History::default(), preset_path }
     }
 
     /// An undoable change of the look; a change that changes nothing leaves no history.
@@ -79,6 +82,7 @@ impl Document {
         let exposure = self.look.exposure;
         self.look = Look::of(&scene, exposure);
         self.history.clear();
+        self.bounds = scene.bounds();
         self.scene = Arc::new(scene);
         self.scene_generation += 1;
     }

@@ -109,17 +109,17 @@ impl FrameTimes {
     }
 
     /// The largest preview level predicted to fit `budget_ms` for a full frame of `width x height`
-    /// with `grid`, or the smallest level when none does.
+    /// with `grid`. Where a frame's fixed cost alone exceeds the budget (the software driver's
+    /// per-triangle work), no level fits: then the largest one within a quarter more time than
+    /// the smallest, since a much finer picture costs little more.
     pub fn preview_scale(&self, width: u32, height: u32, grid: Grid, method: Method, budget_ms: f64) -> f32 {
+        let time = |s: f32| {
+            let (w, h, g) = scaled(width, height, grid, s);
+            self.predict(method, work_units(w, h, g, method))
+        };
         let smallest = LEVELS[LEVELS.len() - 1];
-        LEVELS
-            .iter()
-            .copied()
-            .find(|s| {
-                let (w, h, g) = scaled(width, height, grid, *s);
-                self.predict(method, work_units(w, h, g, method)) <= budget_ms
-            })
-            .unwrap_or(smallest)
+        let target = budget_ms.max(1.25 * time(smallest));
+        LEVELS.iter().copied().find(|s| time(*s) <= target).unwrap_or(smallest)
     }
 
     /// Whether a full frame of `units` is slow enough that a preview should come first.
@@ -157,6 +157,20 @@ mod tests {
         assert!(i == 0 || truth(units(LEVELS[i - 1])) > PREVIEW_BUDGET_MS);
         // Ray marching is a family of its own: no samples yet, the prior decides.
         assert_eq!(t.predict(Method::Raymarch { steps: 64, jitter: true }, 100.0), 150.0 + 2.4e-3 * 100.0);
+    }
+
+    #[test]
+    fn a_fixed_cost_over_the_budget_buys_a_finer_preview() {
+        let mut t = FrameTimes::new(true);
+        // 300 ms whatever the size, plus 0.1 us per unit: no preview fits 120 ms.
+        let truth = |u: f64| 300.0 + 1e-4 * u;
+        for s in [1.0f32, 0.5, 0.25, 0.1] {
+            let (w, h, g) = scaled(640, 480, Grid::default(), s);
+            let u = work_units(w, h, g, Method::Vsv);
+            t.record(Method::Vsv, u, truth(u));
+        }
+        let s = t.preview_scale(640, 480, Grid::default(), Method::Vsv, PREVIEW_BUDGET_MS);
+        assert!(s >= 0.25, "took {s}: the smallest preview saves almost nothing here");
     }
 
     #[test]

@@ -413,14 +413,8 @@ impl Worker {
         let renderer = &lane.renderer;
         let prune = renderer.prune_report(&info).ok();
         let grids = keep.then(|| renderer.read_grid().ok()).flatten().map(|shadow| {
-            Arc::new(GridSnapshot {
-                generation: r.generation,
-                grid,
-                setup: info.setup,
-                camera: r.look.camera,
-                shadow,
-                geometry: renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4),
-            })
+            let geometry = renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4);
+            Arc::new(GridSnapshot::new(r.generation, grid, info.setup, r.look.camera, shadow, geometry))
         });
         let stats = ImageStats::of(&out.hdr, &out.scatter);
         let display = Arc::new(DisplayImages::upload(&self.window.gpu, &self.window.layout, &out.hdr, &out.scatter));

@@ -141,6 +141,6 @@ impl super::Panel for LightPanel {
         "Light"
     }
     fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
-        self.draw(ui, &cx.doc.look.light, &cx.doc.scene.bounds(), out);
+        self.draw(ui, &cx.doc.look.light, &cx.doc.bounds, out);
     }
 }

@@ -172,7 +172,7 @@ impl super::Panel for MediumPanel {
         "Medium"
     }
     fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
-        let size = cx.doc.scene.bounds().radius() * 2.0;
+        let size = cx.doc.bounds.radius() * 2.0;
         self.draw(ui, &cx.doc.look.medium, size, out);
     }
 }

@@ -98,8 +98,7 @@ impl ViewportPanel {
                 let l = drag_light(&look.camera, &look.light, d, rect.height());
                 out.push(Command::SetLight(l, Some(gesture_key(response, response.id.with("light")))));
             }
-        } else if let Some(c) =
-            cx.view.camera.handle(ui, response, &look.camera, cx.doc.scene.bounds().radius(), rect.height())
+        } else if let Some(c) = cx.view.camera.handle(ui, response, &look.camera, cx.doc.bounds.radius(), rect.height())
         {
             // Wheel and keys (no press) merge by a key without the press: one step per burst.
             let key = if response.dragged() {

@@ -24,15 +24,18 @@ pub struct InspectorPanel {
     slice_tex: Option<egui::TextureHandle>,
     grid_img: Option<egui::ColorImage>,
     slice_img: Option<egui::ColorImage>,
-    /// (snapshot generation, mode, slice plane) the pictures show.
-    key: Option<(u64, InspectorMode, u32)>,
+    /// (snapshot generation, mode) the grid picture shows; it does not depend on the slice, which
+    /// changes with every pointer move while the slice follows it.
+    grid_key: Option<(u64, InspectorMode)>,
+    /// (snapshot generation, slice plane, layer marked) the slice shows.
+    slice_key: Option<(u64, u32, Option<u32>)>,
     tracer: Option<(u64, Arc<Tracer>)>,
     /// Where the grid picture was drawn (points).
     pub grid_rect: Option<egui::Rect>,
 }
 
 impl InspectorPanel {
-    /// Rebuilds the pictures when the grid, the mode or the slice plane changed.
+    /// Rebuilds a picture when what it shows changed.
     fn refresh(
         &mut self,
         ctx: &egui::Context,
@@ -42,26 +45,6 @@ impl InspectorPanel {
         scene: &Scene,
         scene_generation: u64,
     ) {
-        let key = (s.generation, mode, plane);
-        if self.key == Some(key) {
-            return;
-        }
-        self.key = Some(key);
-        let tracer = match &self.tracer {
-            Some((g, t)) if *g == scene_generation => t.clone(),
-            _ => {
-                let t = Arc::new(Tracer::new(scene));
-                self.tracer = Some((scene_generation, t.clone()));
-                t
-            }
-        };
-        let depth = surface_bins(&s.setup, &tracer, plane);
-        let layer = match mode {
-            InspectorMode::Layer(k) => Some(k),
-            _ => None,
-        };
-        self.grid_img = grid_image(s, mode);
-        self.slice_img = Some(slice_image(s, plane, Some(&depth), layer));
         let opts = egui::TextureOptions::NEAREST;
         let upload = |tex: &mut Option<egui::TextureHandle>, img: &Option<egui::ColorImage>, name: &str| match img {
             Some(img) => match tex {
@@ -70,8 +53,29 @@ impl InspectorPanel {
             },
             None => *tex = None,
         };
-        upload(&mut self.grid_tex, &self.grid_img, "epivox-inspector-grid");
-        upload(&mut self.slice_tex, &self.slice_img, "epivox-inspector-slice");
+        if self.grid_key != Some((s.generation, mode)) {
+            self.grid_key = Some((s.generation, mode));
+            self.grid_img = grid_image(s, mode);
+            upload(&mut self.grid_tex, &self.grid_img, "epivox-inspector-grid");
+        }
+        let layer = match mode {
+            InspectorMode::Layer(k) => Some(k),
+            _ => None,
+        };
+        if self.slice_key != Some((s.generation, plane, layer)) {
+            self.slice_key = Some((s.generation, plane, layer));
+            let tracer = match &self.tracer {
+                Some((g, t)) if *g == scene_generation => t.clone(),
+                _ => {
+                    let t = Arc::new(Tracer::new(scene));
+                    self.tracer = Some((scene_generation, t.clone()));
+                    t
+                }
+            };
+            let depth = surface_bins(&s.setup, &tracer, plane);
+            self.slice_img = Some(slice_image(s, plane, Some(&depth), layer));
+            upload(&mut self.slice_tex, &self.slice_img, "epivox-inspector-slice");
+        }
     }
 
     /// Exports the current pictures.

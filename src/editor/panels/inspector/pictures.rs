@@ -35,13 +35,10 @@ impl InspectorMode {
             InspectorMode::Layer(_) => "layer: one bin of both grids",
         }
     }
-
-    pub fn needs_geometry(&self) -> bool {
-        !matches!(self, InspectorMode::ShadowCount)
-    }
 }
 
-/// The grid words of one full-quality frame, read back from the GPU by the render worker.
+/// The grid words of one full-quality frame, read back from the GPU by the render worker, with
+/// the count pictures (the slow ones: every word of the grid) built there too.
 pub struct GridSnapshot {
     /// The render generation of the frame.
     pub generation: u64,
@@ -53,32 +50,54 @@ pub struct GridSnapshot {
     pub shadow: Vec<u32>,
     /// Before the scan, same layout (absent when it could not be kept).
     pub geometry: Option<Vec<u32>>,
+    /// [`InspectorMode::ShadowCount`] and [`InspectorMode::GeometryCount`].
+    counts: [Option<egui::ColorImage>; 2],
 }
 
 impl GridSnapshot {
+    /// The snapshot with its count pictures built (call off the UI thread).
+    pub fn new(
+        generation: u64,
+        grid: Grid,
+        setup: FrameSetup,
+        camera: Camera,
+        shadow: Vec<u32>,
+        geometry: Option<Vec<u32>>,
+    ) -> GridSnapshot {
+        let mut s = GridSnapshot { generation, grid, setup, camera, shadow, geometry, counts: [None, None] };
+        s.counts = [count_image(&s, false), count_image(&s, true)];
+        s
+    }
+
     fn ray_words<'a>(&self, bits: &'a [u32], plane: u32, ray: u32) -> &'a [u32] {
         let w = self.grid.words() as usize;
         let i = (ray as usize * self.grid.planes as usize + plane as usize) * w;
         bits.get(i..i + w).unwrap_or(&[])
     }
 
-    /// Bins past the view ray's end (where `gamma + psi >= pi` for a point light).
-    fn beyond(&self, ray: u32, bin: u32) -> bool {
+    /// For a point light: the angle at the eye of each ray and at the light of each bin; a voxel
+    /// lies past its view ray's end where they add up to pi or more. `None`: no voxel does.
+    fn angles(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let m = &self.setup.mapping;
-        self.setup.frame.is_point()
-            && self.setup.method != Method::Cartesian
-            && m.gamma_of_ray(ray as f64 + 0.5) + m.z_of_bin(bin as f64 + 0.5) >= std::f64::consts::PI
+        (self.setup.frame.is_point() && self.setup.method != Method::Cartesian).then(|| {
+            (
+                (0..self.grid.rays).map(|y| m.gamma_of_ray(y as f64 + 0.5)).collect(),
+                (0..self.grid.bins).map(|k| m.z_of_bin(k as f64 + 0.5)).collect(),
+            )
+        })
     }
 
     /// The colour of voxel (plane, ray, bin) in the shared code.
-    fn voxel(&self, plane: u32, ray: u32, bin: u32) -> egui::Color32 {
+    fn voxel(&self, plane: u32, ray: u32, bin: u32, angles: &Option<(Vec<f64>, Vec<f64>)>) -> egui::Color32 {
         let bit = |w: &[u32]| w.get(bin as usize / 32).is_some_and(|w| (w >> (bin % 32)) & 1 == 1);
-        let geo = self.geometry.as_deref().is_some_and(|b| bit(self.ray_words(b, plane, ray)));
-        if geo {
+        let beyond = angles.as_ref().is_some_and(|(g, z)| {
+            g.get(ray as usize).zip(z.get(bin as usize)).is_some_and(|(g, z)| g + z >= std::f64::consts::PI)
+        });
+        if self.geometry.as_deref().is_some_and(|b| bit(self.ray_words(b, plane, ray))) {
             GEOMETRY
         } else if bit(self.ray_words(&self.shadow, plane, ray)) {
             SHADOW
-        } else if self.beyond(ray, bin) {
+        } else if beyond {
             BEYOND
         } else {
             LIT
@@ -106,43 +125,57 @@ fn ramp(t: f32) -> egui::Color32 {
 /// Largest picture side; bigger grids are shown with every n-th plane/ray merged.
 const MAX_SIDE: u32 = 1024;
 
-/// The grid picture: planes across, rays down. `None` when the mode needs the geometry grid and
-/// the frame did not keep it.
-pub fn grid_image(s: &GridSnapshot, mode: InspectorMode) -> Option<egui::ColorImage> {
-    if mode.needs_geometry() && s.geometry.is_none() && !matches!(mode, InspectorMode::Layer(_)) {
-        return None;
-    }
-    let g = s.grid;
+/// Merged cells per picture texel, and the picture's size.
+fn picture_size(g: Grid) -> (u32, u32, u32) {
     let step = g.planes.max(g.rays).div_ceil(MAX_SIDE).max(1);
-    let (w, h) = (g.planes.div_ceil(step), g.rays.div_ceil(step));
-    let mut img = egui::ColorImage::filled([w as usize, h as usize], egui::Color32::BLACK);
+    (step, g.planes.div_ceil(step), g.rays.div_ceil(step))
+}
+
+/// Filled bins per ray of one grid, the largest count of the merged cells per texel. `None`
+/// for the geometry grid when the frame did not keep it.
+fn count_image(s: &GridSnapshot, geometry: bool) -> Option<egui::ColorImage> {
+    let bits = if geometry { s.geometry.as_deref()? } else { &s.shadow[..] };
+    let g = s.grid;
+    let (step, w, h) = picture_size(g);
+    let mut img = egui::ColorImage::filled([w as usize, h as usize], EMPTY);
     for y in 0..h {
         for x in 0..w {
-            img[(x as usize, y as usize)] = match mode {
-                InspectorMode::ShadowCount | InspectorMode::GeometryCount => {
-                    let bits =
-                        if mode == InspectorMode::ShadowCount { Some(&s.shadow[..]) } else { s.geometry.as_deref() };
-                    let bits = bits.unwrap_or(&[]);
-                    // The largest count of the merged cells.
-                    let mut v = 0;
-                    for ray in y * step..((y + 1) * step).min(g.rays) {
-                        for plane in x * step..((x + 1) * step).min(g.planes) {
-                            v = v.max(s.ray_words(bits, plane, ray).iter().map(|w| w.count_ones()).sum::<u32>());
-                        }
-                    }
-                    // sqrt: a few geometry voxels per ray must still show against a full shadow.
-                    if v == 0 {
-                        EMPTY
-                    } else {
-                        ramp(0.15 + 0.85 * (v as f32 / g.bins as f32).sqrt())
-                    }
+            let mut v = 0;
+            for ray in y * step..((y + 1) * step).min(g.rays) {
+                for plane in x * step..((x + 1) * step).min(g.planes) {
+                    v = v.max(s.ray_words(bits, plane, ray).iter().map(|w| w.count_ones()).sum::<u32>());
                 }
-                // Merged cells show their first cell (a layer is a section, not a sum).
-                InspectorMode::Layer(k) => s.voxel(x * step, y * step, k.min(g.bins - 1)),
-            };
+            }
+            // sqrt: a few geometry voxels per ray must still show against a full shadow.
+            if v > 0 {
+                img[(x as usize, y as usize)] = ramp(0.15 + 0.85 * (v as f32 / g.bins as f32).sqrt());
+            }
         }
     }
     Some(img)
+}
+
+/// The grid picture: planes across, rays down. `None` when the mode needs the geometry grid and
+/// the frame did not keep it.
+pub fn grid_image(s: &GridSnapshot, mode: InspectorMode) -> Option<egui::ColorImage> {
+    match mode {
+        InspectorMode::ShadowCount => s.counts[0].clone(),
+        InspectorMode::GeometryCount => s.counts[1].clone(),
+        InspectorMode::Layer(k) => {
+            let g = s.grid;
+            let (step, w, h) = picture_size(g);
+            let angles = s.angles();
+            let k = k.min(g.bins - 1);
+            let mut img = egui::ColorImage::filled([w as usize, h as usize], egui::Color32::BLACK);
+            for y in 0..h {
+                for x in 0..w {
+                    // Merged cells show their first cell (a layer is a section, not a sum).
+                    img[(x as usize, y as usize)] = s.voxel(x * step, y * step, k, &angles);
+                }
+            }
+            Some(img)
+        }
+    }
 }
 
 /// The slice of one plane: rays down, bins across, in the voxel colour code; each ray's surface
@@ -153,10 +186,11 @@ pub fn slice_image(s: &GridSnapshot, plane: u32, surface_bins: Option<&[f32]>, l
     let step = g.rays.div_ceil(MAX_SIDE).max(1);
     let h = g.rays.div_ceil(step);
     let mut img = egui::ColorImage::filled([g.bins as usize, h as usize], egui::Color32::BLACK);
+    let angles = s.angles();
     for y in 0..h {
         let ray = y * step;
         for k in 0..g.bins {
-            let mut c = s.voxel(plane, ray, k);
+            let mut c = s.voxel(plane, ray, k, &angles);
             if layer == Some(k) {
                 // A light blue tint over whatever the voxel is.
                 c = egui::Color32::from_rgb(c.r() / 2 + 40, c.g() / 2 + 90, c.b() / 2 + 127);
@@ -233,7 +267,7 @@ mod tests {
         // Geometry: plane 3, ray 5, bin 33.
         let mut geometry = vec![0u32; 8 * 8 * 2];
         geometry[i + 1] = 2;
-        GridSnapshot { generation: 1, grid, setup, camera: scene.camera, shadow, geometry: Some(geometry) }
+        GridSnapshot::new(1, grid, setup, scene.camera, shadow, Some(geometry))
     }
 
     #[test]
@@ -244,7 +278,7 @@ mod tests {
         assert_eq!(img[(3, 5)], ramp(1.0));
         assert_eq!(img[(1, 1)], EMPTY);
         assert_ne!(grid_image(&s, InspectorMode::GeometryCount).unwrap()[(3, 5)], EMPTY);
-        s.geometry = None;
+        s = GridSnapshot::new(1, s.grid, s.setup, s.camera, s.shadow, None);
         assert!(grid_image(&s, InspectorMode::GeometryCount).is_none());
     }
 
