@@ -215,6 +215,8 @@ struct Worker {
     delivered: Option<(u64, bool)>,
     /// The scene with the current look written in, per scene generation.
     scene: Option<(u64, Scene)>,
+    /// The scene's BVH for the inspector's surface depths, per scene generation.
+    tracer: Option<(u64, Arc<crate::reference::Tracer>)>,
 }
 
 impl Worker {
@@ -270,6 +272,7 @@ impl Worker {
             times: FrameTimes::new(software),
             delivered: None,
             scene: None,
+            tracer: None,
         })
     }
 
@@ -414,7 +417,14 @@ impl Worker {
         let prune = renderer.prune_report(&info).ok();
         let grids = keep.then(|| renderer.read_grid().ok()).flatten().map(|shadow| {
             let geometry = renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4);
-            Arc::new(GridSnapshot::new(r.generation, grid, info.setup, r.look.camera, shadow, geometry))
+            let tracer = match &self.tracer {
+                Some((g, t)) if *g == r.scene_generation => t.clone(),
+                _ => Arc::new(crate::reference::Tracer::new(scene)),
+            };
+            self.tracer = Some((r.scene_generation, tracer.clone()));
+            let mut s = GridSnapshot::new(r.generation, grid, info.setup, r.look.camera, shadow, geometry);
+            s.tracer = Some(tracer);
+            Arc::new(s)
         });
         let stats = ImageStats::of(&out.hdr, &out.scatter);
         let display = Arc::new(DisplayImages::upload(&self.window.gpu, &self.window.layout, &out.hdr, &out.scatter));

@@ -9,13 +9,10 @@ pub use pictures::{GridSnapshot, InspectorMode};
 
 use super::{Command, Panel, PanelCtx};
 use crate::editor::jobs::render::INSPECT_LIMIT;
-use crate::reference::Tracer;
 use crate::render::Method;
-use crate::scene::Scene;
 use eframe::egui;
 use pictures::{export_png, grid_image, slice_image, surface_bins};
 use std::path::Path;
-use std::sync::Arc;
 
 /// The inspector's pictures (caches of the last snapshot) and where it drew them.
 #[derive(Default)]
@@ -29,22 +26,13 @@ pub struct InspectorPanel {
     grid_key: Option<(u64, InspectorMode)>,
     /// (snapshot generation, slice plane, layer marked) the slice shows.
     slice_key: Option<(u64, u32, Option<u32>)>,
-    tracer: Option<(u64, Arc<Tracer>)>,
     /// Where the grid picture was drawn (points).
     pub grid_rect: Option<egui::Rect>,
 }
 
 impl InspectorPanel {
     /// Rebuilds a picture when what it shows changed.
-    fn refresh(
-        &mut self,
-        ctx: &egui::Context,
-        s: &GridSnapshot,
-        mode: InspectorMode,
-        plane: u32,
-        scene: &Scene,
-        scene_generation: u64,
-    ) {
+    fn refresh(&mut self, ctx: &egui::Context, s: &GridSnapshot, mode: InspectorMode, plane: u32) {
         let opts = egui::TextureOptions::NEAREST;
         let upload = |tex: &mut Option<egui::TextureHandle>, img: &Option<egui::ColorImage>, name: &str| match img {
             Some(img) => match tex {
@@ -64,16 +52,8 @@ impl InspectorPanel {
         };
         if self.slice_key != Some((s.generation, plane, layer)) {
             self.slice_key = Some((s.generation, plane, layer));
-            let tracer = match &self.tracer {
-                Some((g, t)) if *g == scene_generation => t.clone(),
-                _ => {
-                    let t = Arc::new(Tracer::new(scene));
-                    self.tracer = Some((scene_generation, t.clone()));
-                    t
-                }
-            };
-            let depth = surface_bins(&s.setup, &tracer, plane);
-            self.slice_img = Some(slice_image(s, plane, Some(&depth), layer));
+            let depth = s.tracer.as_ref().map(|t| surface_bins(&s.setup, t, plane));
+            self.slice_img = Some(slice_image(s, plane, depth.as_deref(), layer));
             upload(&mut self.slice_tex, &self.slice_img, "epivox-inspector-slice");
         }
     }
@@ -162,7 +142,7 @@ impl Panel for InspectorPanel {
         if cx.jobs.render.shown.as_ref().is_some_and(|p| p.generation != s.generation) {
             ui.label(egui::RichText::new("(the grid of the last full-quality frame)").small().weak());
         }
-        self.refresh(ui.ctx(), &s, iv.mode, plane, &cx.doc.scene, cx.doc.scene_generation);
+        self.refresh(ui.ctx(), &s, iv.mode, plane);
         let hovered = self.pictures(ui, &s, plane, cx.view.layout.hover_cell, cx.view.layout.inspector_cell);
         ui.label(
             egui::RichText::new(format!(

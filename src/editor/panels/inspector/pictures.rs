@@ -14,6 +14,7 @@ use crate::render::{FrameSetup, Method};
 use crate::scene::Camera;
 use eframe::egui;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What the grid picture shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -50,6 +51,9 @@ pub struct GridSnapshot {
     pub shadow: Vec<u32>,
     /// Before the scan, same layout (absent when it could not be kept).
     pub geometry: Option<Vec<u32>>,
+    /// The scene's triangles for the slice's surface depths (built once per scene, off the UI
+    /// thread: a BVH of a large scene takes a while).
+    pub tracer: Option<Arc<Tracer>>,
     /// [`InspectorMode::ShadowCount`] and [`InspectorMode::GeometryCount`].
     counts: [Option<egui::ColorImage>; 2],
 }
@@ -64,7 +68,8 @@ impl GridSnapshot {
         shadow: Vec<u32>,
         geometry: Option<Vec<u32>>,
     ) -> GridSnapshot {
-        let mut s = GridSnapshot { generation, grid, setup, camera, shadow, geometry, counts: [None, None] };
+        let mut s =
+            GridSnapshot { generation, grid, setup, camera, shadow, geometry, tracer: None, counts: [None, None] };
         s.counts = [count_image(&s, false), count_image(&s, true)];
         s
     }
