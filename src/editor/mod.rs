@@ -162,6 +162,21 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
     egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
+/// How the window presents: eframe's default, or `EPIVOX_EDITOR_PRESENT=fifo|mailbox|
+/// immediate|novsync` (to measure what presentation costs on a software driver).
+fn surface_config() -> egui_wgpu::SurfaceConfig {
+    let mut c = egui_wgpu::SurfaceConfig::HIGH_THROUGHPUT;
+    let mode = std::env::var("EPIVOX_EDITOR_PRESENT").unwrap_or_default();
+    c.present_mode = match mode.as_str() {
+        "fifo" => wgpu::PresentMode::Fifo,
+        "mailbox" => wgpu::PresentMode::Mailbox,
+        "immediate" => wgpu::PresentMode::Immediate,
+        "novsync" => wgpu::PresentMode::AutoNoVsync,
+        _ => c.present_mode,
+    };
+    c
+}
+
 /// The scene, exposure and preset path the editor starts with: the scene file or the built-in
 /// scene, with the preset applied. Errors name the file and the field.
 pub fn initial_scene(opts: &EditorOptions) -> Result<(Scene, f32, Option<PathBuf>), EditorError> {
@@ -215,7 +230,11 @@ pub fn run(opts: EditorOptions) -> Result<RunSummary, EditorError> {
         // The display pipeline draws into egui's pass: no depth, no MSAA, as it is built.
         depth_buffer: 0,
         multisampling: 0,
-        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() },
+        wgpu_options: egui_wgpu::WgpuConfiguration {
+            wgpu_setup: wgpu_setup(),
+            surface: surface_config(),
+            ..Default::default()
+        },
         ..Default::default()
     };
     let startup_error: Arc<std::sync::Mutex<Option<EditorError>>> = Arc::default();
