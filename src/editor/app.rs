@@ -165,31 +165,40 @@ impl Editor {
             ui_frame_ms: self.meter.ui_frame_ms,
         };
         let p = &mut self.panels;
-        egui::Panel::top("epivox-menu").show(ui, |ui| p.menu.show(ui, &cx, cmds));
-        egui::Panel::bottom("epivox-status").show(ui, |ui| p.status.show(ui, &cx, cmds));
+        // No panel paints its background: the window is cleared to the same colour
+        // (`clear_color`). On the software driver every filled pixel costs, and the panels'
+        // fills were most of a UI frame's rendering.
+        let style = ui.style().clone();
+        let side = egui::Frame::side_top_panel(&style).fill(egui::Color32::TRANSPARENT);
+        let central = egui::Frame::central_panel(&style).fill(egui::Color32::TRANSPARENT);
+        egui::Panel::top("epivox-menu").frame(side).show(ui, |ui| p.menu.show(ui, &cx, cmds));
+        egui::Panel::bottom("epivox-status").frame(side).show(ui, |ui| p.status.show(ui, &cx, cmds));
         let open_accuracy = std::mem::replace(&mut p.accuracy_seen, self.accuracy_started) != self.accuracy_started;
-        egui::Panel::left("epivox-controls").resizable(true).default_size(360.0).min_size(260.0).show(ui, |ui| {
-            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-                let side: [(&mut dyn Panel, bool); 7] = [
-                    (&mut p.presets, true),
-                    (&mut p.medium, true),
-                    (&mut p.phase, true),
-                    (&mut p.light, true),
-                    (&mut p.grid, true),
-                    (&mut p.stats, true),
-                    (&mut p.accuracy, false),
-                ];
-                for (panel, default_open) in side {
-                    // Starting a check (from anywhere) opens its section, so its progress is in view.
-                    let open = (open_accuracy && panel.name() == "Accuracy").then_some(true);
-                    egui::CollapsingHeader::new(panel.name())
-                        .default_open(default_open)
-                        .open(open)
-                        .show(ui, |ui| panel.show(ui, &cx, cmds));
-                }
-            });
-        });
-        egui::CentralPanel::default().show(ui, |ui| {
+        egui::Panel::left("epivox-controls").frame(side).resizable(true).default_size(360.0).min_size(260.0).show(
+            ui,
+            |ui| {
+                egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                    let side: [(&mut dyn Panel, bool); 7] = [
+                        (&mut p.presets, true),
+                        (&mut p.medium, true),
+                        (&mut p.phase, true),
+                        (&mut p.light, true),
+                        (&mut p.grid, true),
+                        (&mut p.stats, true),
+                        (&mut p.accuracy, false),
+                    ];
+                    for (panel, default_open) in side {
+                        // Starting a check (from anywhere) opens its section, so its progress is in view.
+                        let open = (open_accuracy && panel.name() == "Accuracy").then_some(true);
+                        egui::CollapsingHeader::new(panel.name())
+                            .default_open(default_open)
+                            .open(open)
+                            .show(ui, |ui| panel.show(ui, &cx, cmds));
+                    }
+                });
+            },
+        );
+        egui::CentralPanel::default().frame(central).show(ui, |ui| {
             // The panel's width before the toolbar: a wide toolbar row must not widen the viewport
             // (a resize renders again).
             let full = ui.available_rect_before_wrap();
@@ -449,5 +458,10 @@ impl Editor {
 impl eframe::App for Editor {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         Editor::ui(self, ui);
+    }
+
+    /// The panels' colour: the panels paint no background of their own.
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        visuals.panel_fill.to_normalized_gamma_f32()
     }
 }
