@@ -236,6 +236,11 @@ impl Editor {
                 r.device = Some(dev);
             }
             RenderEvent::Started(Err(e)) => self.session.error(format!("the renderer could not start: {e}")),
+            RenderEvent::Stopped(e) => {
+                r.compiling = None;
+                r.reloads_pending = 0;
+                self.session.error(format!("the renderer stopped ({e}); the last picture stays. Restart the editor."));
+            }
             RenderEvent::Frame(Ok(p)) => {
                 self.meter.picture(&p);
                 r.frames += 1;

@@ -130,6 +130,9 @@ pub struct DeviceInfo {
 pub enum RenderEvent {
     /// The worker's device and renderer are ready, or could not be created.
     Started(Result<DeviceInfo, String>),
+    /// The worker ended unexpectedly (a panic in the driver or the renderer): nothing more will
+    /// render; the last picture stays.
+    Stopped(String),
     Frame(Result<Arc<Picture>, FrameFailure>),
     /// A reload finished: the new display pipeline and how long compiling took (ms), or the error
     /// (the old pipelines keep running).
@@ -142,6 +145,7 @@ impl std::fmt::Debug for RenderEvent {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             RenderEvent::Started(r) => write!(f, "Started({:?})", r.as_ref().map(|d| &d.adapter)),
+            RenderEvent::Stopped(e) => write!(f, "Stopped({e})"),
             RenderEvent::Frame(Ok(p)) => write!(f, "Frame({}, {:?})", p.generation, p.quality),
             RenderEvent::Frame(Err(e)) => write!(f, "Frame({e:?})"),
             RenderEvent::Reloaded(r) => write!(f, "Reloaded({:?})", r.as_ref().map(|(_, ms)| ms)),

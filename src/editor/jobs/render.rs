@@ -49,6 +49,8 @@ struct Shared {
     slot: Mutex<Slot>,
     wake: Condvar,
     busy: AtomicBool,
+    /// The worker ended (it panicked, or could not start).
+    stopped: AtomicBool,
 }
 
 /// How the worker is set up (tests and measurements).
@@ -90,8 +92,21 @@ impl RenderJob {
                 let _ = tx.send(e);
                 wake();
             };
-            if let Some(mut w) = Worker::open(window, &lib, opts, &send) {
-                w.run(&s2, &send);
+            // A panic (wgpu reports device errors outside error scopes by panicking) ends the
+            // worker; the UI is told, keeps its last picture and stays usable.
+            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                if let Some(mut w) = Worker::open(window, &lib, opts, &send) {
+                    w.run(&s2, &send);
+                }
+            }));
+            s2.stopped.store(true, Ordering::SeqCst);
+            if let Err(payload) = run {
+                let what = payload
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "a panic".into());
+                send(RenderEvent::Stopped(what));
             }
         })?;
         Ok(RenderJob { shared, rx })
@@ -126,10 +141,11 @@ impl RenderJob {
         self.rx.try_iter().collect()
     }
 
-    /// A frame or task is being worked on or waiting.
+    /// A frame or task is being worked on or waiting (never, once the worker has stopped).
     pub fn in_flight(&self) -> bool {
-        self.shared.busy.load(Ordering::SeqCst)
-            || self.shared.slot.lock().map(|s| s.frame.is_some() || !s.tasks.is_empty()).unwrap_or(false)
+        !self.shared.stopped.load(Ordering::SeqCst)
+            && (self.shared.busy.load(Ordering::SeqCst)
+                || self.shared.slot.lock().map(|s| s.frame.is_some() || !s.tasks.is_empty()).unwrap_or(false))
     }
 }
 
