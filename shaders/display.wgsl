@@ -2,8 +2,9 @@
 // pass (an egui_wgpu paint callback), with exposure, the ACES-fitted tone curve of `src/image.rs`
 // (`tone_map_aces`) and, when the window's surface is not an sRGB format, the sRGB encoding.
 //
-// A full-screen triangle covers the callback's viewport (egui sets it to the widget's rectangle);
-// the texel is fetched with textureLoad because RGBA32Float is not filterable everywhere.
+// A full-screen triangle covers the callback's viewport (egui sets it to the widget's rectangle).
+// The image may be smaller than the viewport (a preview, or fewer pixels): it is filtered
+// bilinearly by hand, with four textureLoads, because RGBA32Float is not filterable everywhere.
 
 struct Display {
     // 2^stops.
@@ -50,11 +51,23 @@ fn encode_srgb(l: f32) -> f32 {
     return 1.055 * pow(c, 1.0 / 2.4) - 0.055;
 }
 
+// The linear image at `uv` (0..1), bilinear between the four nearest texel centres.
+fn sample_linear(uv: vec2<f32>) -> vec3<f32> {
+    let dims = vec2<i32>(textureDimensions(image));
+    let p = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)) * vec2<f32>(dims) - vec2<f32>(0.5);
+    let f = fract(p);
+    let i0 = clamp(vec2<i32>(floor(p)), vec2<i32>(0), dims - vec2<i32>(1));
+    let i1 = min(i0 + vec2<i32>(1), dims - vec2<i32>(1));
+    let a = textureLoad(image, i0, 0).rgb;
+    let b = textureLoad(image, vec2<i32>(i1.x, i0.y), 0).rgb;
+    let c = textureLoad(image, vec2<i32>(i0.x, i1.y), 0).rgb;
+    let d = textureLoad(image, i1, 0).rgb;
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let dims = textureDimensions(image);
-    let texel = min(vec2<u32>(max(in.uv, vec2<f32>(0.0)) * vec2<f32>(dims)), dims - vec2<u32>(1u));
-    let hdr = textureLoad(image, texel, 0).rgb * display.exposure;
+    let hdr = sample_linear(in.uv) * display.exposure;
     var mapped = vec3<f32>(tone_map_aces(hdr.r), tone_map_aces(hdr.g), tone_map_aces(hdr.b));
     if display.linear_target == 0u {
         mapped = vec3<f32>(encode_srgb(mapped.r), encode_srgb(mapped.g), encode_srgb(mapped.b));

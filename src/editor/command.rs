@@ -1,8 +1,10 @@
-//! Commands: what panels, menus, shortcuts and viewport gestures ask for. Only
+//! Commands: what panels, menus, shortcuts, viewport gestures and background jobs ask for. Only
 //! [`super::Editor::apply`] acts on them.
 
-use super::inspector::InspectorMode;
-use super::state::ViewMode;
+use super::camera::CameraMode;
+use super::jobs::JobEvent;
+use super::panels::inspector::InspectorMode;
+use super::view::{ExposureMode, ViewMode};
 use crate::params::{Grid, Light, Medium};
 use crate::render::Method;
 use crate::scene::Camera;
@@ -25,7 +27,7 @@ pub fn gesture_key(r: &egui::Response, id: egui::Id) -> egui::Id {
     id.with(pressed.to_bits())
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub enum Command {
     // --- edits of the look (undoable) ---
     SetMedium(Medium, MergeKey),
@@ -40,11 +42,33 @@ pub enum Command {
     // --- how the look is shown (not part of the look) ---
     SetView(ViewMode),
     SetMethod(Method),
+    /// Shadow-map texels per side (surface shadows, and the ray-marching baseline's visibility).
+    SetShadowMap(u32),
     /// Fraction of the viewport's pixels the renderer draws at (1 = every pixel).
     SetRenderScale(f32),
+    SetCameraMode(CameraMode),
+    /// How the scattered-only view is exposed.
+    SetExposureMode(ExposureMode),
+    /// The scattered-only view's exposure in manual mode (stops).
+    SetScatterExposure(f32),
     ShowInspector(bool),
     SetInspectorMode(InspectorMode),
     SetSlicePlane(u32),
+    SetFollowHover(bool),
+    // --- the viewport and pointer (view state, from the layout and gestures) ---
+    /// Where the viewport was laid out this frame (points) and the pixels per point.
+    LayoutViewport(egui::Rect, f32),
+    /// The grid cell under the pointer in the viewport.
+    HoverViewport(Option<(f64, f64)>),
+    /// The grid cell under the pointer in the inspector.
+    HoverInspector(Option<(f64, f64)>),
+    /// A drag in the viewport starts (true: it moves the light) or ends (false).
+    DragLight(bool),
+    /// Sends the render worker the current state, if it changed; `interactive` while input is
+    /// in progress (previews only). Issued once per frame, after the other commands.
+    RequestFrame {
+        interactive: bool,
+    },
     // --- files ---
     /// Load and apply a preset; a bad one is refused with a message and the look stays.
     LoadPreset(PathBuf),
@@ -55,6 +79,8 @@ pub enum Command {
         path: PathBuf,
         overwrite: bool,
     },
+    /// The overwrite question was answered "Cancel".
+    CancelOverwrite,
     OpenScene(PathBuf),
     /// Save the viewport's current image (tone-mapped as shown) as PNG.
     Screenshot(PathBuf),
@@ -72,4 +98,8 @@ pub enum Command {
     CancelAccuracy,
     ReloadShaders,
     DismissMessages,
+    /// Close the window.
+    Quit,
+    /// Something a background job delivered.
+    Job(JobEvent),
 }

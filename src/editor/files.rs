@@ -55,15 +55,13 @@ impl Recent {
             .unwrap_or_default()
     }
 
-    /// Writes the list (temporary file + rename, like presets). Failing to remember is not worth
-    /// interrupting the user for; the caller logs it.
+    /// Writes the list whole or not at all (`fsx::write_atomic`). Failing to remember is
+    /// not worth interrupting the user for; the caller logs it.
     pub fn save(&self, dir: Option<&Path>) -> std::io::Result<()> {
         let Some(dir) = dir else { return Ok(()) };
         std::fs::create_dir_all(dir)?;
-        let tmp = dir.join(format!(".recent.json.{}.tmp", std::process::id()));
         let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
-        std::fs::write(&tmp, text)?;
-        std::fs::rename(&tmp, dir.join("recent.json"))
+        crate::fsx::write_atomic(&dir.join("recent.json"), |w| std::io::Write::write_all(w, text.as_bytes()))
     }
 
     fn push(list: &mut Vec<PathBuf>, p: &Path) {

@@ -3,45 +3,54 @@
 //! How an edit reaches the screen (one direction only, as everywhere in the crate):
 //!
 //! ```text
-//!  panels (small structs, draw + emit)        viewport input (camera, light drag), menus, files
-//!            │  Command                                     │  Command
-//!            └──────────────────────┬───────────────────────┘
-//!                                   ▼
-//!              Editor::apply  ── the ONE place that changes state; pushes undo history
-//!                                   │
-//!                  Look (camera, light, medium, grid, exposure) + view mode + method
-//!                                   │  compose (cached): Arc<Scene>
-//!                                   ▼
-//!            FrameRequest { generation, scene, size, method }  ──  egui_wgpu paint callback
-//!                                   │ prepare: Renderer::render_frame only when the generation changed
-//!                                   ▼ paint:   display.wgsl tone-maps the HDR texture into egui's pass
-//!            ViewportResources (in egui_wgpu's callback resources): Renderer, display pipeline,
-//!            FrameReport (timings, fitted grid, errors)  ──►  Stats panel, inspector, hover linking
+//!  panels (Panel::show: draw + emit)     viewport gestures, menus, shortcuts     jobs (Jobs::poll)
+//!            │ Command                              │ Command                        │ Command::Job
+//!            └──────────────────────────────────────┼────────────────────────────────┘
+//!                                                   ▼
+//!        Editor::apply — the ONE place that changes state: Document (scene, look, history),
+//!                         View (modes, camera, inspector), Jobs, Session (files, messages)
+//!                                                   │ Command::RequestFrame, once per UI frame
+//!                                                   ▼
+//!        FrameRequest { generation, scene, look, size, method, interactive } ─► RenderJob slot
+//!                                                   │ (the newest replaces the waiting one)
+//!                                                   ▼
+//!        render worker thread, own wgpu device: preview (coarser, when a frame is slow) then
+//!        full frame; Renderer::render reads the images back; textures written on the window's
+//!        device; Picture { images, timings, prune report, grids } ─► channel + request_repaint
+//!                                                   │
+//!                                                   ▼
+//!        UI: the newest Picture is shown by a paint callback (display.wgsl: exposure, ACES, sRGB);
+//!            Stats, inspector and hover linking read it
 //! ```
 //!
-//! Side jobs never block editing: shader edits arrive from a `notify` watcher thread, scenes load
-//! on a thread, file dialogs run on threads (rfd, xdg portal), and the accuracy reference renders on
-//! a thread with progress and cancel. Each delivers its result through a channel that the UI polls.
+//! Side jobs never block editing: shader edits arrive from a `notify` watcher thread and compile
+//! on the render worker, scenes load on a thread, file dialogs run on threads (rfd, xdg portal),
+//! and the accuracy reference renders on a thread with progress and cancel.
 //!
-//! See `docs/editor.md` for the user's view and the tests.
+//! See `docs/editor.md` for the user's view, the measurements and the tests.
 
-mod accuracy;
 mod app;
+mod apply;
 mod camera;
 mod command;
+mod display;
+mod document;
 mod files;
-mod inspector;
+mod jobs;
+mod measure;
 mod panels;
-mod state;
-mod viewport;
-mod watch;
+mod session;
+mod view;
 
-pub use accuracy::check_options;
 pub use app::Editor;
+pub use camera::CameraMode;
 pub use command::{Command, MergeKey};
-pub use inspector::InspectorMode;
-pub use state::{History, Look, ViewMode};
-pub use viewport::{FrameReport, ViewportResources};
+pub use document::{History, Look};
+pub use jobs::accuracy::check_options;
+pub use jobs::render::{Picture, Quality};
+pub use panels::inspector::InspectorMode;
+pub use session::Message;
+pub use view::{ExposureMode, ViewMode};
 
 use crate::gpu::{GpuContext, GpuError};
 use crate::preset::{Preset, PresetError};
@@ -49,6 +58,7 @@ use crate::scene::{builtin_scene, load_scene, Scene, SceneError};
 use eframe::egui_wgpu;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 /// What the editor starts with. Everything but the scene, preset and shader folder is for tests
 /// and measurements.
@@ -71,6 +81,11 @@ pub struct EditorOptions {
     pub quit_after_frames: Option<u32>,
     /// With `quit_after_frames`: save a screenshot of the whole window here before quitting.
     pub screenshot: Option<PathBuf>,
+    /// Render on the window's device and queue instead of a second device (to measure the
+    /// difference; also `EPIVOX_EDITOR_SHARED_DEVICE=1`).
+    pub shared_device: bool,
+    /// Tests: the render worker sleeps this long before each frame (a slow GPU on any machine).
+    pub frame_delay: Option<Duration>,
 }
 
 impl Default for EditorOptions {
@@ -84,6 +99,8 @@ impl Default for EditorOptions {
             watch_shaders: true,
             quit_after_frames: None,
             screenshot: None,
+            shared_device: false,
+            frame_delay: None,
         }
     }
 }
@@ -145,6 +162,21 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
     egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
+/// How the window presents: eframe's default, or `EPIVOX_EDITOR_PRESENT=fifo|mailbox|
+/// immediate|novsync` (to measure what presentation costs on a software driver).
+fn surface_config() -> egui_wgpu::SurfaceConfig {
+    let mut c = egui_wgpu::SurfaceConfig::HIGH_THROUGHPUT;
+    let mode = std::env::var("EPIVOX_EDITOR_PRESENT").unwrap_or_default();
+    c.present_mode = match mode.as_str() {
+        "fifo" => wgpu::PresentMode::Fifo,
+        "mailbox" => wgpu::PresentMode::Mailbox,
+        "immediate" => wgpu::PresentMode::Immediate,
+        "novsync" => wgpu::PresentMode::AutoNoVsync,
+        _ => c.present_mode,
+    };
+    c
+}
+
 /// The scene, exposure and preset path the editor starts with: the scene file or the built-in
 /// scene, with the preset applied. Errors name the file and the field.
 pub fn initial_scene(opts: &EditorOptions) -> Result<(Scene, f32, Option<PathBuf>), EditorError> {
@@ -166,9 +198,9 @@ pub fn initial_scene(opts: &EditorOptions) -> Result<(Scene, f32, Option<PathBuf
 pub struct RunSummary {
     /// Frames rendered.
     pub frames: u32,
-    /// Wall time from one rendered frame to the next (UI, render, present), mean (ms).
+    /// Wall time from one full frame on screen to the next (render, read-back, upload), mean (ms).
     pub frame_ms_mean: f64,
-    /// `Renderer::render_frame` wall time (CPU + waiting for the GPU), mean (ms).
+    /// `Renderer::render` wall time on the worker (record, GPU, read-back), mean (ms).
     pub render_ms_mean: f64,
     /// Sum of the GPU pass timings, mean (ms); 0 without timestamps.
     pub gpu_ms_mean: f64,
@@ -198,7 +230,11 @@ pub fn run(opts: EditorOptions) -> Result<RunSummary, EditorError> {
         // The display pipeline draws into egui's pass: no depth, no MSAA, as it is built.
         depth_buffer: 0,
         multisampling: 0,
-        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() },
+        wgpu_options: egui_wgpu::WgpuConfiguration {
+            wgpu_setup: wgpu_setup(),
+            surface: surface_config(),
+            ..Default::default()
+        },
         ..Default::default()
     };
     let startup_error: Arc<std::sync::Mutex<Option<EditorError>>> = Arc::default();

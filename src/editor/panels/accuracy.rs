@@ -1,8 +1,10 @@
 //! The Accuracy panel: starts the reference check, shows its progress with a cancel button, then
 //! the relative RMSE and a difference image.
 
-use super::Command;
-use crate::editor::accuracy::{AccuracyJob, AccuracyResult};
+use super::{Command, Panel, PanelCtx};
+use crate::editor::document::Look;
+use crate::editor::jobs::accuracy::AccuracyResult;
+use crate::editor::jobs::Accuracy;
 use eframe::egui;
 
 pub struct AccuracyPanel {
@@ -17,12 +19,25 @@ impl Default for AccuracyPanel {
     }
 }
 
+impl Panel for AccuracyPanel {
+    fn name(&self) -> &'static str {
+        "Accuracy"
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, out: &mut Vec<Command>) {
+        let result = cx.jobs.accuracy_result.as_deref();
+        // The look changed since the result was measured.
+        let look = cx.doc.look;
+        let stale = result.is_some_and(|r| Look::of(&r.scene, look.exposure) != look);
+        self.draw(ui, &cx.jobs.accuracy, result, stale, out);
+    }
+}
+
 impl AccuracyPanel {
-    /// `stale`: the look changed since the result was measured.
-    pub fn show(
+    fn draw(
         &mut self,
         ui: &mut egui::Ui,
-        job: Option<&AccuracyJob>,
+        job: &Accuracy,
         result: Option<&AccuracyResult>,
         stale: bool,
         out: &mut Vec<Command>,
@@ -35,7 +50,16 @@ impl AccuracyPanel {
             .small(),
         );
         match job {
-            Some(j) => {
+            Accuracy::Capturing { width, height, method_label, .. } => {
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    if ui.button("Cancel").clicked() {
+                        out.push(Command::CancelAccuracy);
+                    }
+                });
+                ui.label(format!("taking the GPU image {width}×{height} of {method_label} …"));
+            }
+            Accuracy::Running(j) => {
                 ui.horizontal(|ui| {
                     ui.add(egui::ProgressBar::new(j.progress()).show_percentage().desired_width(160.0));
                     if ui.button("Cancel").clicked() {
@@ -44,7 +68,7 @@ impl AccuracyPanel {
                 });
                 ui.label(format!("reference {}×{} of {} …", j.width, j.height, j.method_label));
             }
-            None => {
+            Accuracy::Idle => {
                 ui.horizontal(|ui| {
                     egui::ComboBox::new("accuracy-width", "reference size")
                         .selected_text(format!("{} px wide", self.width))

@@ -18,7 +18,7 @@ pub struct GridLimits {
 }
 
 impl GridPanel {
-    pub fn show(&mut self, ui: &mut egui::Ui, grid: &Grid, limits: GridLimits, out: &mut Vec<Command>) {
+    fn draw(&mut self, ui: &mut egui::Ui, grid: &Grid, limits: Option<GridLimits>, out: &mut Vec<Command>) {
         let mut g = *grid;
         let mut changed = None;
         for (value, spec, label) in [(&mut g.planes, Grid::PLANES, "planes"), (&mut g.rays, Grid::RAYS, "rays")] {
@@ -58,6 +58,10 @@ impl GridPanel {
             }
         }
         let need = grid.bytes();
+        let Some(limits) = limits else {
+            ui.label(egui::RichText::new(format!("{} = {}", grid, bytes(need))).small());
+            return;
+        };
         let over = need > limits.buffer_bytes || grid.planes.max(grid.rays) > limits.texture_side;
         let text = format!(
             "{} = {} (the adapter allows {} per buffer, {} texels per side)",
@@ -71,5 +75,15 @@ impl GridPanel {
         } else {
             ui.label(egui::RichText::new(text).small());
         }
+    }
+}
+
+impl super::Panel for GridPanel {
+    fn name(&self) -> &'static str {
+        "Grid"
+    }
+    fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
+        let limits = cx.jobs.render.device.as_ref().map(|d| d.limits);
+        self.draw(ui, &cx.doc.look.grid, limits, out);
     }
 }

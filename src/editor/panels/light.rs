@@ -52,7 +52,7 @@ fn power_editor(ui: &mut egui::Ui, v: Vec3, spec: &Spec, label: &str) -> Option<
 }
 
 impl LightPanel {
-    pub fn show(&mut self, ui: &mut egui::Ui, light: &Light, bounds: &Aabb, out: &mut Vec<Command>) {
+    fn draw(&mut self, ui: &mut egui::Ui, light: &Light, bounds: &Aabb, out: &mut Vec<Command>) {
         let mut point = light.is_point();
         ui.horizontal(|ui| {
             ui.selectable_value(&mut point, true, "point");
@@ -133,5 +133,14 @@ impl LightPanel {
             }
         }
         ui.label(egui::RichText::new("Drag the light's handle in the viewport to move it.").small());
+    }
+}
+
+impl super::Panel for LightPanel {
+    fn name(&self) -> &'static str {
+        "Light"
+    }
+    fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
+        self.draw(ui, &cx.doc.look.light, &cx.doc.bounds, out);
     }
 }

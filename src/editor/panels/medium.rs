@@ -95,7 +95,7 @@ const ALBEDO: Spec = Spec {
 
 impl MediumPanel {
     /// `scene_size`: the scene's bounding diameter, for the optical depth shown.
-    pub fn show(&mut self, ui: &mut egui::Ui, m: &Medium, scene_size: f32, out: &mut Vec<Command>) {
+    fn draw(&mut self, ui: &mut egui::Ui, m: &Medium, scene_size: f32, out: &mut Vec<Command>) {
         ui.horizontal(|ui| {
             ui.selectable_value(&mut self.view, MediumView::Coefficients, "σs / σa");
             ui.selectable_value(&mut self.view, MediumView::AlbedoExtinction, "albedo / extinction");
@@ -164,6 +164,16 @@ impl MediumPanel {
             ))
             .small(),
         );
+    }
+}
+
+impl super::Panel for MediumPanel {
+    fn name(&self) -> &'static str {
+        "Medium"
+    }
+    fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
+        let size = cx.doc.bounds.radius() * 2.0;
+        self.draw(ui, &cx.doc.look.medium, size, out);
     }
 }
 

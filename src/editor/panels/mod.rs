@@ -1,15 +1,20 @@
-//! The side panels. Each is a small struct that draws itself from the current values and pushes
-//! [`Command`]s; none changes editor state directly (only [`super::Editor::apply`] does).
+//! The panels. Each is a small struct that draws itself from the editor's state and pushes
+//! [`Command`]s; none changes editor state (only [`super::Editor::apply`] does). All share one
+//! signature, [`Panel::show`], with the state to read in a [`PanelCtx`] (as egui's demo `View`).
 //!
 //! Every slider takes its range, unit and tooltip from the parameter's [`Spec`] in `params.rs`.
 
 mod accuracy;
 mod grid;
+pub mod inspector;
 mod light;
 mod medium;
+pub mod menu;
 mod phase;
 mod presets;
 mod stats;
+pub mod toolbar;
+pub mod viewport;
 
 pub use accuracy::AccuracyPanel;
 pub use grid::{GridLimits, GridPanel};
@@ -17,7 +22,30 @@ pub use light::LightPanel;
 pub use medium::MediumPanel;
 pub use phase::PhasePanel;
 pub use presets::PresetsPanel;
-pub use stats::{StatsContext, StatsPanel};
+pub use stats::StatsPanel;
+
+use super::document::Document;
+use super::jobs::Jobs;
+use super::session::Session;
+use super::view::View;
+
+/// What a panel may read: the whole editor state, borrowed for one frame.
+pub struct PanelCtx<'a> {
+    pub doc: &'a Document,
+    pub view: &'a View,
+    pub jobs: &'a Jobs,
+    pub session: &'a Session,
+    /// Smoothed time between UI frames (ms).
+    pub ui_frame_ms: f64,
+}
+
+/// A panel: draws from the state and asks for changes.
+pub trait Panel {
+    /// The header it is shown under.
+    fn name(&self) -> &'static str;
+    /// Draws the panel and pushes what the user asked for to `out`.
+    fn show(&mut self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, out: &mut Vec<Command>);
+}
 
 use super::command::{merge_key, Command, MergeKey};
 use crate::params::Spec;

@@ -12,43 +12,32 @@ pub struct PhasePanel {
     pub log_radius: bool,
 }
 
-/// The phase function of kind `index` in [`Phase::KINDS`] with asymmetry `g` where it has one.
-pub fn phase_of_kind(index: usize, g: f32) -> Phase {
-    match index {
-        0 => Phase::Isotropic,
-        1 => Phase::HenyeyGreenstein { g },
-        2 => Phase::Schlick { g },
-        3 => Phase::CornetteShanks { g },
-        _ => Phase::Rayleigh,
-    }
-}
-
-fn has_g(p: &Phase) -> bool {
-    matches!(p, Phase::HenyeyGreenstein { .. } | Phase::Schlick { .. } | Phase::CornetteShanks { .. })
-}
-
 impl PhasePanel {
-    pub fn show(&mut self, ui: &mut egui::Ui, m: &Medium, out: &mut Vec<Command>) {
+    fn draw(&mut self, ui: &mut egui::Ui, m: &Medium, out: &mut Vec<Command>) {
         let phase = m.phase;
-        let mut kind = phase.id() as usize;
-        egui::ComboBox::from_label("phase function").selected_text(Phase::KINDS[kind]).show_ui(ui, |ui| {
+        let mut kind = phase.id();
+        egui::ComboBox::from_label("phase function").selected_text(phase.kind_name()).show_ui(ui, |ui| {
             for (i, name) in Phase::KINDS.iter().enumerate() {
-                ui.selectable_value(&mut kind, i, *name);
+                ui.selectable_value(&mut kind, i as u32, *name);
             }
         });
         // Keep the asymmetry when switching between lobed kinds; a fresh lobe starts mildly forward.
         // (clamped into the new kind's range: Schlick's is narrower).
-        let g_now = if has_g(&phase) { phase.g() } else { 0.3 };
-        if kind != phase.id() as usize {
-            let spec = phase_of_kind(kind, g_now).g_spec();
-            let g = (g_now as f64).clamp(spec.min, spec.max) as f32;
-            out.push(Command::SetMedium(Medium { phase: phase_of_kind(kind, g), ..*m }, None));
+        let g_now = if phase.has_g() { phase.g() } else { 0.3 };
+        if kind != phase.id() {
+            if let Some(p) = Phase::of_kind(kind, g_now) {
+                let spec = p.g_spec();
+                let g = (g_now as f64).clamp(spec.min, spec.max) as f32;
+                if let Some(p) = Phase::of_kind(kind, g) {
+                    out.push(Command::SetMedium(Medium { phase: p, ..*m }, None));
+                }
+            }
         }
-        if has_g(&phase) {
+        if phase.has_g() {
             let mut g = phase.g();
             let (r, k) = spec_slider(ui, &mut g, phase.g_spec(), "g (asymmetry)");
-            if r.changed() {
-                out.push(Command::SetMedium(Medium { phase: phase_of_kind(kind, g), ..*m }, k));
+            if let (true, Some(p)) = (r.changed(), Phase::of_kind(phase.id(), g)) {
+                out.push(Command::SetMedium(Medium { phase: p, ..*m }, k));
             }
         }
         ui.checkbox(&mut self.log_radius, "log radius");
@@ -75,7 +64,7 @@ impl PhasePanel {
             .show(ui, |p| {
                 p.line(Line::new("isotropic", PlotPoints::from(circle)).color(egui::Color32::from_gray(110)));
                 p.line(
-                    Line::new(Phase::KINDS[kind], PlotPoints::from(lobe)).color(egui::Color32::from_rgb(255, 170, 60)),
+                    Line::new(phase.kind_name(), PlotPoints::from(lobe)).color(egui::Color32::from_rgb(255, 170, 60)),
                 );
             });
         ui.label(
@@ -87,5 +76,14 @@ impl PhasePanel {
             ))
             .small(),
         );
+    }
+}
+
+impl super::Panel for PhasePanel {
+    fn name(&self) -> &'static str {
+        "Phase function"
+    }
+    fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
+        self.draw(ui, &cx.doc.look.medium, out);
     }
 }

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 #[derive(Default)]
 pub struct PresetsPanel {
     /// Name typed for "Save as new preset".
-    pub name: String,
+    pub typed: String,
     list: Vec<PathBuf>,
     listed: Option<(PathBuf, Instant)>,
 }
@@ -40,7 +40,7 @@ impl PresetsPanel {
         }
     }
 
-    pub fn show(&mut self, ui: &mut egui::Ui, dir: &Path, current: Option<&Path>, out: &mut Vec<Command>) {
+    fn draw(&mut self, ui: &mut egui::Ui, dir: &Path, current: Option<&Path>, out: &mut Vec<Command>) {
         self.refresh(dir);
         ui.label(egui::RichText::new(format!("{}", dir.display())).small());
         ui.horizontal_wrapped(|ui| {
@@ -72,8 +72,8 @@ impl PresetsPanel {
             }
         });
         ui.horizontal(|ui| {
-            ui.add(egui::TextEdit::singleline(&mut self.name).hint_text("new preset name").desired_width(140.0));
-            let file = file_name_for(&self.name);
+            ui.add(egui::TextEdit::singleline(&mut self.typed).hint_text("new preset name").desired_width(140.0));
+            let file = file_name_for(&self.typed);
             let r = ui.add_enabled(file.is_some(), egui::Button::new("Save to folder"));
             if let Some(f) = &file {
                 let r = r.on_hover_text(format!("Write {}", dir.join(f).display()));
@@ -82,6 +82,15 @@ impl PresetsPanel {
                 }
             }
         });
+    }
+}
+
+impl super::Panel for PresetsPanel {
+    fn name(&self) -> &'static str {
+        "Presets"
+    }
+    fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
+        self.draw(ui, &cx.session.presets_dir, cx.doc.preset_path.as_deref(), out);
     }
 }
 

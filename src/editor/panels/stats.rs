@@ -1,25 +1,13 @@
 //! The Stats panel: GPU time per pass, frame times, grid memory, the fitted grid ranges and what
 //! the frame left out.
 
-use super::bytes;
-use crate::editor::viewport::FrameReport;
+use super::{bytes, Command, Panel, PanelCtx};
+use crate::editor::jobs::render::{Picture, Quality};
 use crate::render::{FrameSetup, Method, PruneReport};
 use eframe::egui;
 
 #[derive(Default)]
 pub struct StatsPanel;
-
-/// What the Stats panel shows besides the frame report.
-#[derive(Debug, Clone, Copy)]
-pub struct StatsContext<'a> {
-    /// Smoothed time between UI frames (ms).
-    pub ui_frame_ms: f64,
-    pub grid_bytes: u64,
-    pub adapter: &'a str,
-    /// The adapter has encoder timestamps.
-    pub timestamps: bool,
-    pub point_light: bool,
-}
 
 /// Lines saying what the fitted frame leaves out (DESIGN section 6), from its setup.
 pub fn savings(setup: &FrameSetup, point_light: bool) -> Vec<String> {
@@ -87,29 +75,66 @@ pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
     v
 }
 
-impl StatsPanel {
-    pub fn show(&mut self, ui: &mut egui::Ui, report: Option<&FrameReport>, c: &StatsContext<'_>) {
-        let StatsContext { ui_frame_ms, grid_bytes, adapter, timestamps, point_light } = *c;
-        ui.label(egui::RichText::new(adapter).small());
-        ui.label(format!("UI frame: {ui_frame_ms:.1} ms"));
-        let Some(r) = report else {
+/// Which picture is on screen, in words (the Stats panel and the viewport's marker).
+pub fn quality_line(p: &Picture) -> String {
+    match p.quality {
+        Quality::Full => format!("full quality: {}×{} pixels, grid {}", p.width, p.height, p.grid),
+        Quality::Preview(s) => format!(
+            "preview ({:.0}% of the pixels): {}×{} pixels, grid {}; full quality follows when the input stops",
+            (s * s * 100.0).max(1.0),
+            p.width,
+            p.height,
+            p.grid
+        ),
+    }
+}
+
+impl Panel for StatsPanel {
+    fn name(&self) -> &'static str {
+        "Stats"
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, _out: &mut Vec<Command>) {
+        let r = &cx.jobs.render;
+        let look = &cx.doc.look;
+        let point_light = look.light.is_point();
+        let Some(dev) = &r.device else {
+            ui.label("starting the renderer…");
+            return;
+        };
+        if dev.software {
+            ui.colored_label(
+                ui.visuals().warn_fg_color,
+                "Software driver: a full frame takes seconds. Previews follow the hand while you drag; a smaller \
+                 grid (Grid) or fewer pixels (toolbar) makes the full frame come sooner.",
+            );
+        }
+        ui.label(
+            egui::RichText::new(format!(
+                "{}{}",
+                dev.adapter,
+                if dev.shared_queue { " · renders on the window's queue" } else { " · own device and queue" }
+            ))
+            .small(),
+        );
+        ui.label(format!("UI frame: {:.1} ms", cx.ui_frame_ms));
+        if let Some(f) = &r.failure {
+            ui.colored_label(ui.visuals().error_fg_color, &f.error);
+        }
+        let Some(p) = &r.shown else {
             ui.label("no frame rendered yet");
             return;
         };
+        ui.label(format!("on screen: {}", quality_line(p)));
         ui.label(format!(
-            "last render: {}×{}, {:.1} ms wall (record + GPU + readback of timestamps)",
-            r.width, r.height, r.render_ms
+            "rendered in {:.1} ms ({:.1} ms with read-back, statistics and upload){}",
+            p.render_ms,
+            p.total_ms,
+            if r.job.in_flight() { " · rendering the next…" } else { "" }
         ));
-        let info = match &r.result {
-            Ok(info) => Some(info),
-            Err(e) => {
-                ui.colored_label(ui.visuals().error_fg_color, e);
-                r.last_good.as_ref().map(|g| &g.info)
-            }
-        };
-        let Some(info) = info else { return };
+        let info = &p.info;
         if info.timings.is_empty() {
-            ui.label(if timestamps {
+            ui.label(if dev.timestamps {
                 "no GPU timings for this frame"
             } else {
                 "no GPU timings: the adapter has no encoder timestamps"
@@ -128,14 +153,17 @@ impl StatsPanel {
         }
         ui.label(format!(
             "grid memory: {} (+ the same again while the inspector keeps the geometry grid)",
-            bytes(grid_bytes)
+            bytes(look.grid.bytes())
         ));
-        let lines = match &r.prune {
-            Some(p) => prune_lines(p, point_light),
+        let lines = match &p.prune {
+            Some(pr) => prune_lines(pr, point_light),
             None => savings(&info.setup, point_light),
         };
         for line in lines {
             ui.label(egui::RichText::new(line).small());
+        }
+        if let Some(ms) = r.reload_ms {
+            ui.label(egui::RichText::new(format!("last shader reload compiled in {ms:.0} ms")).small());
         }
     }
 }

@@ -1,8 +1,12 @@
-//! The editable state ("the look") and its undo history.
+//! The document: the scene being edited, its look, and the look's undo history.
+//!
+//! Only [`super::Editor::apply`] changes a [`Document`]; panels read it.
 
 use super::command::MergeKey;
 use crate::params::{Grid, Light, Medium};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Aabb, Camera, Scene};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Everything an edit can change: what a preset or a scene file describes besides the meshes.
 /// Undo and redo swap whole looks (a few hundred bytes), so every edit is undoable by construction.
@@ -30,24 +34,64 @@ impl Look {
     }
 }
 
-/// What the viewport shows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum ViewMode {
-    /// Surfaces seen through the medium plus the scattered light.
-    #[default]
-    Final,
-    /// The in-scattered light alone.
-    Scattered,
-    /// The surfaces without any medium (rendered with the medium's density at 0).
-    Surface,
+/// The scene, its look and history, and the preset the look was last loaded from or saved to.
+#[derive(Debug)]
+pub struct Document {
+    /// The scene as loaded (its own camera, light, medium and grid; the look overrides them).
+    pub scene: Arc<Scene>,
+    /// The scene's bounds (panels and gestures size their steps by it; computed once per scene).
+    pub bounds: Aabb,
+    /// Bumped when another scene is opened (the renderer uploads geometry again).
+    pub scene_generation: u64,
+    pub look: Look,
+    pub history: History,
+    pub preset_path: Option<PathBuf>,
 }
 
-impl ViewMode {
-    pub const ALL: [(ViewMode, &'static str); 3] =
-        [(ViewMode::Final, "Final"), (ViewMode::Scattered, "Scattered only"), (ViewMode::Surface, "Surface only")];
+impl Document {
+    pub fn new(scene: Scene, exposure: f32, preset_path: Option<PathBuf>) -> Document {
+        let look = Look::of(&scene, exposure);
+        let bounds = scene.bounds();
+        Document { scene: Arc::new(scene), bounds, scene_generation: 1, look, history: History::default(), preset_path }
+    }
 
-    pub fn label(self) -> &'static str {
-        Self::ALL.iter().find(|(m, _)| *m == self).map(|(_, l)| *l).unwrap_or("?")
+    /// An undoable change of the look; a change that changes nothing leaves no history.
+    pub fn edit(&mut self, key: MergeKey, f: impl FnOnce(&mut Look)) {
+        let before = self.look;
+        f(&mut self.look);
+        if self.look != before {
+            self.history.record(before, key);
+        }
+    }
+
+    pub fn undo(&mut self) {
+        if let Some(l) = self.history.undo(self.look) {
+            self.look = l;
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if let Some(l) = self.history.redo(self.look) {
+            self.look = l;
+        }
+    }
+
+    /// Another scene replaces this one: its own look (the exposure stays) and a fresh history
+    /// (the old steps describe the old scene).
+    pub fn replace_scene(&mut self, scene: Scene) {
+        let exposure = self.look.exposure;
+        self.look = Look::of(&scene, exposure);
+        self.history.clear();
+        self.bounds = scene.bounds();
+        self.scene = Arc::new(scene);
+        self.scene_generation += 1;
+    }
+
+    /// The scene with the current look written into it.
+    pub fn composed(&self) -> Scene {
+        let mut s = (*self.scene).clone();
+        self.look.apply_to(&mut s);
+        s
     }
 }
 
