@@ -58,6 +58,12 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     // records hold indices into it.
     let tri = id.x + id.y * groups.x * 64u;
     if (tri >= arrayLength(&tris) / 3u) { return; }
+    // A triangle of zero area hides no light ray: no work for it (loaders drop them too).
+    let p0 = tris[3u * tri].xyz;
+    if (all(cross(tris[3u * tri + 1u].xyz - p0, tris[3u * tri + 2u].xyz - p0) == vec3f(0.0))) {
+        atomicAdd(&counters[2], 1u);
+        return;
+    }
     let rects = triangle_rects(tri);
     if (rects.a.x >= rects.a.z) {
         atomicAdd(&counters[2], 1u);

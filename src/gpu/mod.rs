@@ -28,7 +28,7 @@ pub enum GpuError {
     TooLarge { what: String, needed: u64, limit: u64, adapter: String, hint: String },
     #[error(transparent)]
     Shader(#[from] ShaderError),
-    #[error("GPU validation error while {during}: {message}")]
+    #[error("GPU error while {during}: {message}")]
     Validation { during: String, message: String },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),

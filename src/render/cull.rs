@@ -32,7 +32,7 @@ pub struct CullCounts {
     pub kept: u32,
     /// Dropped: outside the bins' z range (beyond the farthest visible depth, or not a caster).
     pub culled_depth: u32,
-    /// Dropped: outside the visible wedge of planes or past the last visible ray.
+    /// Dropped: outside the visible wedge of planes, past the last visible ray, or of zero area.
     pub culled_view: u32,
     /// Voxelize's work items (one triangle x one plane x one 32-bit word of bins).
     pub items: u64,

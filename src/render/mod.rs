@@ -390,9 +390,13 @@ impl Renderer {
             &format!("the work lists of {n} triangles"),
             n.min(per_chunk) * (CullLists::BYTES_PER_TRIANGLE + 4),
         )?;
+        let during = match &scene.source {
+            Some(path) => format!("uploading the {n} triangles of {}", path.display()),
+            None => format!("uploading the {n} triangles of the scene"),
+        };
         let ctx = self.ctx.clone();
-        ctx.scoped("uploading the scene", || self.set_scene(scene))?;
-        self.ctx.take_uncaptured("uploading the scene")
+        ctx.scoped(&during, || self.set_scene(scene))?;
+        self.ctx.take_uncaptured(&during)
     }
 
     fn ensure_targets(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
