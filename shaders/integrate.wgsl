@@ -233,13 +233,16 @@ fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
 // Where the own-shadow layer in front of a surface lit from behind begins, in z: one cell of the
 // grid from the surface at t_s, where `back` = |cos| between the view ray and the surface normal.
 // A neighbouring plane's light ray is displaced by up to r_axis * dphi (r_axis = t sin(gamma), the
-// distance from the axis) across the view ray, which is a height of that much above the surface;
-// 3/4 bin of z is displaced along the view ray (then z_of_bin below does it in z directly).
+// distance from the axis) across the view ray, which is a height of that much above the surface,
+// reached `across / back` before it on the view ray; 3/4 bin of z is displaced along the view ray
+// (z_of_bin below does that in z directly).
 // z_scale: z = t z_scale for a directional light (sin gamma, or the Cartesian grid's depth scale).
 fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32) -> f32 {
     var across = t_s * sin(gamma) * f.b2.w / f32(f.grid.x);
     if (is_cartesian(f)) { across = t_s * 2.0 * max(f.cam_right.w, f.cam_up.w) / f32(f.grid.x); }
-    let t = max(t_s - across / max(back, 1e-6), 0.0);
+    // At grazing views the tangent plane stops standing for the surface (a curved one bends away
+    // from it): the layer is at most 8 cells long on the view ray.
+    let t = max(t_s - across / max(back, 0.125), 0.0);
     var z = t * z_scale;
     if (is_point_light()) { z = z_along(f, gamma, t); }
     return max(z_of_bin(f, bin_coord(f, z) - 0.75), z_start);

@@ -22,7 +22,7 @@ fn main() {
     };
     let result = match cli.command {
         Some(Command::Render(args)) => cli::render(args),
-        Some(Command::Compare { a, b, json }) => cli::compare(&a, &b, json),
+        Some(Command::Compare { a, b, json, diff, gain }) => cli::compare(&a, &b, json, diff.as_deref(), gain),
         Some(Command::Check(args)) => cli::check(args),
         Some(Command::Bench(args)) => cli::bench(args),
         Some(Command::Edit(args)) => cli::edit(args),

@@ -179,3 +179,58 @@ impl fmt::Display for ErrorStats {
         Ok(())
     }
 }
+
+/// A picture of `a` against the reference `b`, side by side: the reference, the image and their
+/// difference, as 8-bit sRGB RGB of `3 width x height`. All three share one scale: the
+/// reference's 99.5th percentile of luminance maps to white, so the two images can be compared by
+/// eye; the difference panel shows `|a - b|` times `gain` on a black-blue-magenta-yellow ramp
+/// (yellow: a difference of 1 / gain of that white or more).
+pub fn comparison_picture(a: &Image, b: &Image, gain: f32) -> Result<(u32, u32, Vec<u8>), MetricsError> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(MetricsError::SizeMismatch {
+            test_width: a.width,
+            test_height: a.height,
+            ref_width: b.width,
+            ref_height: b.height,
+        });
+    }
+    let lum = |p: &[f32; 3]| (p[0] + p[1] + p[2]) / 3.0;
+    let mut l: Vec<f32> = b.pixels.iter().map(lum).filter(|v| v.is_finite()).collect();
+    l.sort_by(|x, y| x.total_cmp(y));
+    let white = l.get((l.len().saturating_sub(1) as f64 * 0.995) as usize).copied().unwrap_or(1.0);
+    let scale = if white > 0.0 { 1.0 / white } else { 1.0 };
+    let grey = |v: f32| {
+        let x = (v * scale).clamp(0.0, 1.0).powf(1.0 / 2.2);
+        let c = (x * 255.0 + 0.5) as u8;
+        [c, c, c]
+    };
+    let ramp = |d: f32| {
+        let t = (d * scale * gain).clamp(0.0, 1.0);
+        // black -> blue -> magenta -> yellow
+        let (r, g, bl) = if t < 1.0 / 3.0 {
+            (0.0, 0.0, 3.0 * t)
+        } else if t < 2.0 / 3.0 {
+            (3.0 * t - 1.0, 0.0, 1.0)
+        } else {
+            (1.0, 3.0 * t - 2.0, 3.0 - 3.0 * t)
+        };
+        [(r * 255.0) as u8, (g * 255.0) as u8, (bl * 255.0) as u8]
+    };
+    let (w, h) = (a.width as usize, a.height as usize);
+    if w == 0 || h == 0 {
+        return Err(MetricsError::Empty { width: a.width, height: a.height });
+    }
+    let mut out = vec![0u8; 3 * w * h * 3];
+    for y in 0..h {
+        for x in 0..w {
+            let (pa, pb) = (&a.pixels[y * w + x], &b.pixels[y * w + x]);
+            let diff = (0..3).map(|c| (pa[c] - pb[c]).abs()).sum::<f32>() / 3.0;
+            let diff = if diff.is_finite() { diff } else { f32::INFINITY };
+            for (panel, rgb) in [grey(lum(pb)), grey(lum(pa)), ramp(diff)].into_iter().enumerate() {
+                let i = 3 * (y * 3 * w + panel * w + x);
+                out[i..i + 3].copy_from_slice(&rgb);
+            }
+        }
+    }
+    Ok((3 * a.width, a.height, out))
+}

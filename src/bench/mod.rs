@@ -365,6 +365,46 @@ pub fn time_at_error(front: &[(f64, f64)], error: f64) -> Option<f64> {
     Some((a.0.ln() + s * (b.0.ln() - a.0.ln())).exp())
 }
 
+/// How a grid method's point compares with the baseline's sweep: the cheapest raymarch point that is
+/// at least as accurate (its scattered light's relative RMSE no larger), and that point's time over
+/// this one's. `None` when no raymarch point of the sweep is that accurate: then this point is
+/// better than the whole sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BaselineRatio {
+    /// The cheapest as-accurate raymarch point's setting and total time (ms).
+    pub baseline: Option<(String, f64)>,
+    /// `baseline time / this point's time`.
+    pub ratio: Option<f64>,
+}
+
+impl BaselineRatio {
+    /// `12.3x (vs 256 steps, map 2048)` or `none as accurate`.
+    pub fn describe(&self) -> String {
+        match (&self.baseline, self.ratio) {
+            (Some((setting, _)), Some(r)) => format!("{r:.2}x (vs {setting})"),
+            _ => "no raymarch point as accurate".into(),
+        }
+    }
+}
+
+/// [`BaselineRatio`] of `row` against the raymarch rows of `rows` (every point of the baseline's
+/// sweep with a finite error counts).
+pub fn baseline_ratio(rows: &[Row], row: &Row) -> BaselineRatio {
+    let cheapest = rows
+        .iter()
+        .filter(|b| b.point.method_name() == "raymarch")
+        .filter(|b| b.scatter.rel_rmse.is_finite() && b.timing.total_ms.is_finite())
+        .filter(|b| b.scatter.rel_rmse <= row.scatter.rel_rmse)
+        .min_by(|a, b| a.timing.total_ms.total_cmp(&b.timing.total_ms));
+    match cheapest {
+        Some(b) => BaselineRatio {
+            baseline: Some((b.point.setting(), b.timing.total_ms)),
+            ratio: Some(b.timing.total_ms / row.timing.total_ms),
+        },
+        None => BaselineRatio { baseline: None, ratio: None },
+    }
+}
+
 fn style(len: u64, progress: bool) -> ProgressBar {
     let bar = ProgressBar::new(len);
     if !progress {
@@ -578,6 +618,41 @@ mod tests {
         assert!((time_at_error(&f, 0.01).unwrap() - 10.0).abs() < 1e-9);
         assert_eq!(time_at_error(&f, 0.5), Some(1.0));
         assert_eq!(time_at_error(&f, 1e-4), None);
+    }
+
+    fn row(point: Point, ms: f64, err: f64) -> Row {
+        let stats = ErrorStats {
+            rel_rmse: err,
+            rmse: err,
+            max_abs: err,
+            psnr: 0.0,
+            mean_ref: 1.0,
+            non_finite: 0,
+            pixels: 1,
+        };
+        Row {
+            point,
+            timing: Timing { total_ms: ms, volume_ms: ms, passes: Vec::new(), frames: 1 },
+            scatter: stats.clone(),
+            hdr: stats,
+        }
+    }
+
+    #[test]
+    fn baseline_ratio_takes_the_cheapest_as_accurate_march() {
+        let rows = [
+            row(Point::march(16, 2048, false), 10.0, 0.20),
+            row(Point::march(64, 2048, false), 40.0, 0.05),
+            row(Point::march(256, 4096, false), 100.0, 0.03),
+            row(Point::march(1024, 2048, false), 300.0, 0.04),
+            row(Point::grid(Method::Vsv, 1024, 1024, 256, 2048), 20.0, 0.04),
+            row(Point::grid(Method::Vsv, 1024, 1024, 1024, 2048), 25.0, 0.01),
+        ];
+        let r = baseline_ratio(&rows, &rows[4]);
+        assert_eq!(r.baseline, Some(("256 steps, map 4096".to_string(), 100.0)));
+        assert_eq!(r.ratio, Some(5.0));
+        assert_eq!(baseline_ratio(&rows, &rows[5]), BaselineRatio { baseline: None, ratio: None });
+        assert!(baseline_ratio(&rows, &rows[5]).describe().contains("no raymarch point"));
     }
 
     #[test]

@@ -368,6 +368,34 @@ pub fn markdown(r: &BenchResults) -> String {
         }
     }
 
+    // Every grid point against the cheapest raymarch point that is at least as accurate.
+    if methods(&r.rows).contains(&"raymarch") {
+        let _ = writeln!(
+            s,
+            "\n### Against the cheapest as-accurate baseline point\n\nFor every grid point: the cheapest raymarch point of \
+             the sweep whose scattered light is at least as accurate, and its frame time over the grid point's (the \
+             speed-up at equal or better error). \"none\": no raymarch point of the sweep is that accurate.\n"
+        );
+        let _ = writeln!(s, "| method | setting | rel RMSE | ms | cheapest as-accurate raymarch | its ms | ratio |");
+        let _ = writeln!(s, "|---|---|---:|---:|---|---:|---:|");
+        for row in r.rows.iter().filter(|x| x.point.method_name() != "raymarch") {
+            let b = super::baseline_ratio(&r.rows, row);
+            let (setting, t) = match &b.baseline {
+                Some((setting, t)) => (setting.clone(), ms(*t)),
+                None => ("none".into(), "—".into()),
+            };
+            let ratio = b.ratio.map_or("—".into(), |x| format!("{x:.2}x"));
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {setting} | {t} | {ratio} |",
+                row.point.method_name(),
+                row.point.setting(),
+                pct(row.scatter.rel_rmse),
+                ms(row.timing.total_ms)
+            );
+        }
+    }
+
     // Equal error: for each VSV front point, the baseline's time at the same error.
     let ms_of = methods(&r.rows);
     if ms_of.contains(&"raymarch") {

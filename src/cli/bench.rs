@@ -87,10 +87,17 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     let r =
         bench::run(&mut renderer, &scene, &opts).with_context(|| format!("benchmark into {}", args.out.display()))?;
 
-    println!("{:<10} {:<24} {:>11} {:>11}", "method", "setting", "total ms", "rel RMSE");
+    println!(
+        "{:<10} {:<24} {:>11} {:>11}  {}",
+        "method", "setting", "total ms", "rel RMSE", "the cheapest raymarch point as accurate, time over this one's"
+    );
     for row in &r.rows {
+        let against = match row.point.method_name() {
+            "raymarch" => String::new(),
+            _ => bench::baseline_ratio(&r.rows, row).describe(),
+        };
         println!(
-            "{:<10} {:<24} {:>11.3} {:>10.3}%",
+            "{:<10} {:<24} {:>11.3} {:>10.3}%  {against}",
             row.point.method_name(),
             row.point.setting(),
             row.timing.total_ms,

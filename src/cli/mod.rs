@@ -50,6 +50,13 @@ pub enum Command {
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
+        /// Also write a PNG of the reference, the image and their difference side by side (one
+        /// brightness scale for all three; the difference amplified by --gain).
+        #[arg(long, value_name = "PNG")]
+        diff: Option<PathBuf>,
+        /// How much the difference panel of --diff is amplified.
+        #[arg(long, default_value_t = 4.0, value_parser = gain_in_range)]
+        gain: f32,
     },
     /// Run the matrix of stiff and extreme cases through every method against the reference;
     /// prints a table and exits non-zero when any case fails (docs/stability.md).
@@ -509,11 +516,39 @@ pub fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn compare(a: &Path, b: &Path, json: bool) -> Result<()> {
+/// `--gain`: 1 to 1000.
+fn gain_in_range(s: &str) -> Result<f32, String> {
+    let g: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if !(1.0..=1000.0).contains(&g) {
+        return Err(format!("{g} is out of range [1, 1000]"));
+    }
+    Ok(g)
+}
+
+pub fn compare(a: &Path, b: &Path, json: bool, diff: Option<&Path>, gain: f32) -> Result<()> {
+    if let Some(d) = diff {
+        if d.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("png".into()) {
+            anyhow::bail!("--diff {}: the picture is a PNG; name it .png", d.display());
+        }
+        outputs::check_not_input("--diff", d, &[a.to_path_buf(), b.to_path_buf()])?;
+    }
     let ia = Image::read_exr(a)?;
     let ib = Image::read_exr(b)?;
     let stats =
         metrics::compare(&ia, &ib).with_context(|| format!("comparing {} against {}", a.display(), b.display()))?;
+    if let Some(d) = diff {
+        let (w, h, rgb) = metrics::comparison_picture(&ia, &ib, gain)?;
+        let mut png = Vec::new();
+        image::ImageEncoder::write_image(
+            image::codecs::png::PngEncoder::new(&mut png),
+            &rgb,
+            w,
+            h,
+            image::ExtendedColorType::Rgb8,
+        )
+        .with_context(|| format!("encoding --diff {}", d.display()))?;
+        epivox::fsx::write_bytes_atomic(d, &png).with_context(|| format!("writing --diff {}", d.display()))?;
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&stats.to_json())?);
     } else {
