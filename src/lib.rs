@@ -10,11 +10,11 @@
 //!                                    │
 //!            params (ranges, docs) ──┤
 //!                                    ▼
-//!   render::Renderer: Surface ─► ShadowMap ─► Voxelize ─► Scan ─► ScatterTable ─► Integrate ─► Composite
-//!                                    │                                                   │
-//!                                    ▼                                                   ▼
-//!                      reference::render (f64, CPU)                         Image (linear RGB) ─► PNG / EXR
-//!                                    └──────────────► metrics::compare ◄────────────────┘
+//!   render::Renderer: ShadowMap ─► Surface ─► Ranges ─► Cull ─► Voxelize ─► Scan ─► ScatterTable ─► Integrate ─► Composite
+//!                                    │          (or Raymarch, the baseline, after Surface)          │
+//!                                    ▼                                                               ▼
+//!                      reference::render (f64, CPU)                                     Image (linear RGB) ─► PNG / EXR
+//!                                    └──────────────► metrics::compare ◄────────────────────────────┘
 //! ```
 //!
 //! See `docs/architecture.md` for the longer version and `../shared/DESIGN.md` for the mathematics.

@@ -6,7 +6,7 @@
 //! content stays the same while the triangle count grows.
 
 use crate::params::{Grid, Light, Medium};
-use crate::scene::{Camera, Mesh, Scene};
+use crate::scene::{build, Camera, Mesh, Scene};
 use glam::Vec3;
 
 /// Spheres per side of the grid.
@@ -14,40 +14,11 @@ const SIDE: usize = 8;
 
 /// A UV sphere with `lon` segments around and `lat` rings (2 * lon * (lat - 1) triangles).
 fn sphere(name: String, c: Vec3, r: f32, lon: usize, lat: usize) -> Mesh {
-    let mut positions = Vec::with_capacity(lon * (lat - 1) + 2);
-    positions.push(c + Vec3::Y * r);
-    for i in 1..lat {
-        let th = std::f32::consts::PI * i as f32 / lat as f32;
-        for j in 0..lon {
-            let ph = std::f32::consts::TAU * j as f32 / lon as f32;
-            positions.push(c + r * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()));
-        }
-    }
-    positions.push(c - Vec3::Y * r);
-    let bottom = positions.len() as u32 - 1;
-    let ring = |i: usize, j: usize| (1 + (i - 1) * lon + j % lon) as u32;
-    let mut triangles = Vec::with_capacity(2 * lon * (lat - 1));
-    for j in 0..lon {
-        triangles.push([0, ring(1, j + 1), ring(1, j)]);
-        triangles.push([bottom, ring(lat - 1, j), ring(lat - 1, j + 1)]);
-    }
-    for i in 1..lat - 1 {
-        for j in 0..lon {
-            let (a, b, c2, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
-            triangles.push([a, b, d]);
-            triangles.push([a, d, c2]);
-        }
-    }
-    Mesh { name, positions, triangles, albedo: Vec3::new(0.6, 0.55, 0.5) }
+    Mesh { albedo: Vec3::new(0.6, 0.55, 0.5), ..build::sphere(&name, c, r, lat as u32, lon as u32) }
 }
 
 fn quad(name: &str, c: Vec3, u: Vec3, v: Vec3) -> Mesh {
-    Mesh {
-        name: name.into(),
-        positions: vec![c - u - v, c + u - v, c + u + v, c - u + v],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        albedo: Vec3::splat(0.7),
-    }
+    Mesh { albedo: Vec3::splat(0.7), ..build::quad(name, c, u, v) }
 }
 
 /// A room with 64 spheres and at least `target` triangles in all (and at least 64 * 24 + 12),

@@ -88,8 +88,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         bench::run(&mut renderer, &scene, &opts).with_context(|| format!("benchmark into {}", args.out.display()))?;
 
     println!(
-        "{:<10} {:<24} {:>11} {:>11}  {}",
-        "method", "setting", "total ms", "rel RMSE", "the cheapest raymarch point as accurate, time over this one's"
+        "{:<10} {:<24} {:>11} {:>11}  the cheapest raymarch point as accurate, time over this one's",
+        "method", "setting", "total ms", "rel RMSE"
     );
     for row in &r.rows {
         let against = match row.point.method_name() {

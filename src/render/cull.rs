@@ -128,11 +128,8 @@ impl Cull {
     pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &super::SceneGpu) {
         let l = &geometry.lists;
         self.bind_groups = geometry
-            .chunks
-            .iter()
-            .filter(|(_, n)| *n > 0)
-            .enumerate()
-            .map(|(i, (tris, n))| {
+            .nonempty_chunks()
+            .map(|(i, tris, n)| {
                 let b = CullBindings {
                     f: frame.as_entire_binding(),
                     tris: tris.as_entire_binding(),
@@ -142,7 +139,7 @@ impl Cull {
                     counters: self.counters.as_entire_binding(),
                     dispatch: self.dispatch.as_entire_binding(),
                 };
-                (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), *n)
+                (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), n)
             })
             .collect();
     }

@@ -17,23 +17,37 @@ pub const FLAG_NO_SCATTER: u32 = 16;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct FrameUniforms {
+    /// Camera right, up and forward unit vectors; `w`: tan(half fov x), tan(half fov y), near.
     pub cam_right: Vec4,
     pub cam_up: Vec4,
     pub cam_fwd: Vec4,
+    /// Eye position; `w`: far.
     pub eye: Vec4,
     pub view_proj: Mat4,
+    /// Point light: its position, `w` = 1. Directional: the unit vector toward it, `w` = 0.
     pub light: Vec4,
+    /// Intensity (W/sr) or irradiance (W/m^2); `w`: the point light's softening radius.
     pub light_power: Vec4,
+    /// Unit axis from the eye toward the light; `w`: the eye-light distance D (0 for a sun).
     pub axis: Vec4,
+    /// Basis around the axis; `b1.w`: the first plane's angle phi0, `b2.w`: the planes' span.
     pub b1: Vec4,
     pub b2: Vec4,
+    /// sigma_s per channel; `w`: the phase function's asymmetry g.
     pub sigma_s: Vec4,
+    /// sigma_t per channel; `w` unused.
     pub sigma_t: Vec4,
+    /// gamma_lo, gamma_hi (the rays), z_lo, z_hi (the bins; Ranges overwrites `zw` on the GPU).
     pub ranges: Vec4,
+    /// The box the medium fills for a directional light (`w` unused).
     pub medium_min: Vec4,
     pub medium_max: Vec4,
+    /// planes, rays, bins, 32-bit words per ray.
     pub grid: UVec4,
+    /// Image width and height, unused, flags (`FLAG_*`).
     pub image: UVec4,
+    /// Scatter-table rows and columns, the Cartesian grid's light axis (0 +right, 1 -right, 2 +up,
+    /// 3 -up), unused.
     pub table: UVec4,
 }
 

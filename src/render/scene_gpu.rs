@@ -23,6 +23,12 @@ impl SceneGpu {
     /// Bytes per triangle in a chunk.
     pub const TRIANGLE_BYTES: u64 = 48;
 
+    /// The chunks that hold triangles, numbered, with their buffer and triangle count (a scene
+    /// without triangles has none).
+    pub fn nonempty_chunks(&self) -> impl Iterator<Item = (usize, &wgpu::Buffer, u32)> {
+        self.chunks.iter().filter(|(_, n)| *n > 0).enumerate().map(|(i, (b, n))| (i, b, *n))
+    }
+
     /// Uploads `scene`; `max_binding` is the largest storage binding the adapter allows (bytes).
     pub fn new(device: &wgpu::Device, scene: &Scene, max_binding: u64) -> SceneGpu {
         let mut vertices: Vec<[f32; 6]> = Vec::new();

@@ -55,11 +55,8 @@ impl Voxelize {
     ) {
         let l = &geometry.lists;
         self.bind_groups = geometry
-            .chunks
-            .iter()
-            .filter(|(_, n)| *n > 0)
-            .enumerate()
-            .map(|(i, (tris, _))| {
+            .nonempty_chunks()
+            .map(|(i, tris, _)| {
                 let b = VoxelizeBindings {
                     f: frame.as_entire_binding(),
                     tris: tris.as_entire_binding(),
