@@ -1,4 +1,4 @@
-// triangle_bounds.wgsl: where a triangle lies in the grid, shared by the Cull and Voxelize passes.
+// triangle_bounds.wgsl: where a triangle lies in the grid (its planes, rays and bins), for the Cull pass.
 //
 // The importing file declares `f: Frame` and `tris: array<vec4f>` (three world vertices per
 // triangle). gamma and psi over a segment are extremal at its ends or at one stationary point
