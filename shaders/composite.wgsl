@@ -6,7 +6,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var surface: texture_2d<f32>;
 @group(0) @binding(2) var distance: texture_2d<f32>;
 @group(0) @binding(3) var scatter: texture_2d<f32>;

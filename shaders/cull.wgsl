@@ -18,7 +18,7 @@
 #import common
 #import triangle_bounds
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 // Per kept triangle: (triangle, first plane, planes, first word | words << 16).
 @group(0) @binding(2) var<storage, read_write> records: array<vec4u>;

@@ -28,7 +28,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var<storage, read> grid: array<u32>;
 @group(0) @binding(2) var<storage, read> table: array<vec4f>;
 @group(0) @binding(3) var distance: texture_2d<f32>;

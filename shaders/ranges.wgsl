@@ -12,7 +12,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var distance: texture_2d<f32>;
 // [0]: max visible z (float bits), [1], [2]: the final z_lo, z_hi (float bits).
 @group(0) @binding(2) var<storage, read_write> out: array<atomic<u32>, 4>;

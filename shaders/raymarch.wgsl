@@ -34,12 +34,12 @@ struct March {
     params: vec4u,
 }
 
-@group(0) @binding(0) var<uniform> f: Frame;
-@group(0) @binding(1) var<uniform> shadow: ShadowFaces;
+@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(1) var<storage, read> shadow: ShadowFaces;
 @group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
 @group(0) @binding(3) var distance: texture_2d<f32>;
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(5) var<uniform> march: March;
+@group(0) @binding(5) var<storage, read> march: March;
 
 // 1 when the light reaches p: one nearest-texel lookup.
 fn lit(p: vec3f) -> f32 {

@@ -9,7 +9,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var<storage, read_write> grid: array<u32>;
 
 @compute @workgroup_size(64)

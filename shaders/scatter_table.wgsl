@@ -21,7 +21,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var<storage, read_write> table: array<vec4f>;
 
 fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {

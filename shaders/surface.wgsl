@@ -14,8 +14,8 @@
 #import common
 #import shadow_lookup
 
-@group(0) @binding(0) var<uniform> f: Frame;
-@group(0) @binding(1) var<uniform> shadow: ShadowFaces;
+@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(1) var<storage, read> shadow: ShadowFaces;
 @group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
 
 struct VsOut {

@@ -24,7 +24,7 @@
 
 #import common
 
-@group(0) @binding(0) var<uniform> f: Frame;
+@group(0) @binding(0) var<storage, read> f: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 @group(0) @binding(2) var<storage, read_write> grid: array<atomic<u32>>;
 // Written by the Cull pass (cull.wgsl).

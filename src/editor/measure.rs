@@ -111,6 +111,7 @@ impl Meter {
                 "grid": p.grid.to_string(),
                 "render_ms": p.render_ms,
                 "total_ms": p.total_ms,
+                "passes_ms": p.info.timings.iter().map(|t| (t.pass.to_string(), t.ms)).collect::<std::collections::BTreeMap<_, _>>(),
             });
             let _ = writeln!(t, "{line}");
         }

@@ -15,7 +15,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Cull's bind group for one chunk of triangles (cull.wgsl).
     CullBindings {
-        f: Kind::Uniform,
+        f: Kind::Storage,
         tris: Kind::Storage,
         records: Kind::StorageRw,
         offsets: Kind::StorageRw,

@@ -15,7 +15,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Integrate's bind group (integrate.wgsl).
     IntegrateBindings {
-        f: Kind::Uniform,
+        f: Kind::Storage,
         grid: Kind::Storage,
         table: Kind::Storage,
         distance: Kind::Texture,

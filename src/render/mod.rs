@@ -244,11 +244,15 @@ impl Renderer {
     pub fn new(ctx: GpuContext, lib: &ShaderLibrary) -> Result<Renderer, GpuError> {
         let shadow_map_size = Baseline::default().shadow_map.min(ctx.device.limits().max_texture_dimension_2d);
         let passes = Passes::new(&ctx, lib, shadow_map_size)?;
+        // Read-only storage, not uniform buffers: lavapipe (Mesa's software Vulkan) compiles a new
+        // variant of a shader for every distinct value of the uniforms that steer its control flow
+        // (uniform inlining), 0.1-0.7 s per pass for every camera or light move; it never inlines
+        // storage buffers. GPUs read both alike (docs/results.md, "The first frame").
         let uniform = |label: &str, size: usize| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: size as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
@@ -780,5 +784,32 @@ mod binding_tests {
         check("integrate.wgsl", IntegrateBindings::SLOTS);
         check("raymarch.wgsl", RaymarchBindings::SLOTS);
         check("composite.wgsl", CompositeBindings::SLOTS);
+    }
+
+    /// The frame's parameters reach the passes through read-only storage buffers: on lavapipe a
+    /// uniform buffer whose values steer control flow gets the shader recompiled for every new
+    /// value (0.1-0.7 s per pass: every camera move in the editor, the first frame of every
+    /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
+    #[test]
+    fn only_the_shadow_map_faces_are_uniform_buffers() {
+        let passes: [(&str, &[(&str, Kind)]); 10] = [
+            ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
+            ("surface.wgsl", SurfaceBindings::SLOTS),
+            ("ranges.wgsl", RangesBindings::SLOTS),
+            ("cull.wgsl", CullBindings::SLOTS),
+            ("voxelize.wgsl", VoxelizeBindings::SLOTS),
+            ("scan.wgsl", ScanBindings::SLOTS),
+            ("scatter_table.wgsl", ScatterTableBindings::SLOTS),
+            ("integrate.wgsl", IntegrateBindings::SLOTS),
+            ("raymarch.wgsl", RaymarchBindings::SLOTS),
+            ("composite.wgsl", CompositeBindings::SLOTS),
+        ];
+        let uniform: Vec<String> = passes
+            .iter()
+            .flat_map(|(file, slots)| {
+                slots.iter().filter(|(_, k)| *k == Kind::Uniform).map(move |(name, _)| format!("{file}: {name}"))
+            })
+            .collect();
+        assert_eq!(uniform, ["shadow_map.wgsl: face"]);
     }
 }

@@ -8,7 +8,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Ranges' bind group (ranges.wgsl; `out` is the pass's own result buffer).
-    RangesBindings { f: Kind::Uniform, distance: Kind::Texture, out: Kind::StorageRw }
+    RangesBindings { f: Kind::Storage, distance: Kind::Texture, out: Kind::StorageRw }
 }
 
 pub struct Ranges {

@@ -24,12 +24,12 @@ use glam::UVec4;
 bindings! {
     /// Raymarch's bind group (raymarch.wgsl; `march` is the pass's own uniform buffer).
     RaymarchBindings {
-        f: Kind::Uniform,
-        shadow: Kind::Uniform,
+        f: Kind::Storage,
+        shadow: Kind::Storage,
         shadow_map: Kind::TextureArray,
         distance: Kind::Texture,
         scatter_out: Kind::StorageTexture(Raymarch::OUTPUT),
-        march: Kind::Uniform,
+        march: Kind::Storage,
     }
 }
 
@@ -60,7 +60,8 @@ impl Raymarch {
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Raymarch::uniforms"),
             size: std::mem::size_of::<RaymarchUniforms>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            // Storage, like the frame's (see Renderer::new): the step count steers the march.
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let pipelines =

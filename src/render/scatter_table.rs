@@ -13,7 +13,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// ScatterTable's bind group (scatter_table.wgsl).
-    ScatterTableBindings { f: Kind::Uniform, table: Kind::StorageRw }
+    ScatterTableBindings { f: Kind::Storage, table: Kind::StorageRw }
 }
 
 pub struct ScatterTable {

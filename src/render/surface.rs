@@ -11,7 +11,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Surface's bind group (surface.wgsl).
-    SurfaceBindings { f: Kind::Uniform, shadow: Kind::Uniform, shadow_map: Kind::TextureArray }
+    SurfaceBindings { f: Kind::Storage, shadow: Kind::Storage, shadow_map: Kind::TextureArray }
 }
 
 /// The pass's render targets, `width x height`.

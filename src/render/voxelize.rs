@@ -16,7 +16,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Voxelize's bind group for one chunk of triangles (voxelize.wgsl).
     VoxelizeBindings {
-        f: Kind::Uniform,
+        f: Kind::Storage,
         tris: Kind::Storage,
         grid: Kind::StorageRw,
         records: Kind::Storage,

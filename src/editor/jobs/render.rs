@@ -24,7 +24,7 @@ use crate::editor::display::{DisplayImages, DisplayPipeline};
 use crate::editor::panels::inspector::GridSnapshot;
 use crate::editor::panels::GridLimits;
 use crate::gpu::{GpuContext, ShaderLibrary};
-use crate::render::{Method, Renderer};
+use crate::render::{Method, Renderer, Variant};
 use crate::scene::Scene;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -187,6 +187,9 @@ struct Lane {
     /// Shaders it still has to be rebuilt from (a reload reaches the full-quality renderer when it
     /// is next needed, after the preview has shown the new shaders).
     stale: Option<ShaderLibrary>,
+    /// The shader variant whose pipelines have run (been compiled by the driver) since the last
+    /// (re)build.
+    warm: Option<Variant>,
 }
 
 impl Lane {
@@ -196,6 +199,7 @@ impl Lane {
             scene_generation: None,
             keep_geometry: false,
             stale: None,
+            warm: None,
         })
     }
 
@@ -203,6 +207,7 @@ impl Lane {
     fn prepare(&mut self, scene: &Scene, generation: u64, keep_geometry: bool) -> Result<(), String> {
         if let Some(lib) = self.stale.take() {
             self.renderer.reload(&lib).map_err(|e| e.to_string())?;
+            self.warm = None;
         }
         if self.scene_generation != Some(generation) {
             self.renderer.set_scene(scene);
@@ -351,6 +356,7 @@ impl Worker {
         let display = DisplayPipeline::new(&self.window.gpu, lib, &self.window.layout, self.window.format)
             .map_err(|e| e.to_string())?;
         self.preview.renderer.reload(lib).map_err(|e| e.to_string())?;
+        self.preview.warm = None;
         if let Some(full) = &mut self.full {
             full.stale = Some(lib.clone());
         }
@@ -367,8 +373,8 @@ impl Worker {
             return None;
         }
         let units = work_units(r.width, r.height, r.look.grid, r.method);
-        if done.is_none() && r.progressive && self.times.wants_preview(r.method, units, PREVIEW_BUDGET_MS) {
-            let s = self.times.preview_scale(r.width, r.height, r.look.grid, r.method, PREVIEW_BUDGET_MS);
+        if done.is_none() && r.progressive && self.times.wants_preview(r.method, r.interactive, units, PREVIEW_BUDGET_MS) {
+            let s = self.times.preview_scale(r.width, r.height, r.look.grid, r.method, r.interactive, PREVIEW_BUDGET_MS);
             let delivered = self.render(r, Quality::Preview(s), send);
             return (delivered && !r.interactive).then(|| r.clone());
         }
@@ -445,7 +451,13 @@ impl Worker {
         let stats = ImageStats::of(&out.hdr, &out.scatter);
         let display = Arc::new(DisplayImages::upload(&self.window.gpu, &self.window.layout, &out.hdr, &out.scatter));
         let total_ms = t0.elapsed().as_secs_f64() * 1e3;
-        self.times.record(r.method, work_units(width, height, grid, r.method), total_ms);
+        // A frame that ran a pipeline for the first time also paid the driver's compilation
+        // (seconds on llvmpipe): it says nothing about the next frame's time.
+        let warm = lane.warm == Some(info.variant);
+        lane.warm = Some(info.variant);
+        if warm {
+            self.times.record(r.method, r.interactive, work_units(width, height, grid, r.method), total_ms);
+        }
         self.delivered = Some((r.generation, quality.is_full()));
         send(RenderEvent::Frame(Ok(Arc::new(Picture {
             generation: r.generation,
