@@ -4,6 +4,13 @@
 // and the light (axis `a`, basis b1/b2 around it), the fitted grid ranges, the pixel convention and
 // the phase functions. A layout test checks this struct against the Rust one.
 
+// Parameters: each pass binds the frame's parameters (and the shadow map's, the march's) as a
+// read-only *storage* buffer (`frame_in`) and copies it into a private `f` at every entry point.
+// Not a uniform buffer: lavapipe recompiles a shader for every new value of a uniform that steers
+// control flow (about 2 s a frame for the voxel passes whenever the camera moves). The private
+// copy lets the compiler keep the values in registers instead of reloading them from the buffer
+// in every loop iteration (the march: 2.5x faster on llvmpipe than reading the buffer directly).
+
 const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;
 const INV_4PI: f32 = 0.0795774715459477;

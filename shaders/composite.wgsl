@@ -6,14 +6,18 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var surface: texture_2d<f32>;
 @group(0) @binding(2) var distance: texture_2d<f32>;
 @group(0) @binding(3) var scatter: texture_2d<f32>;
 @group(0) @binding(4) var hdr: texture_storage_2d<rgba32float, write>;
 
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
+    f = frame_in;
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
     let p = vec2i(id.xy);
     let t = textureLoad(distance, p, 0).x;

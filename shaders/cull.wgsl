@@ -18,7 +18,7 @@
 #import common
 #import triangle_bounds
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 // Per kept triangle: (triangle, first plane, planes, first word | words << 16).
 @group(0) @binding(2) var<storage, read_write> records: array<vec4u>;
@@ -32,6 +32,9 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
 // DispatchIndirect arguments: [3..6] Voxelize, [6..9] Scan ([0..3] unused).
 @group(0) @binding(6) var<storage, read_write> dispatch: array<u32, 12>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (256 threads x 4)
 const VOXEL_GROUP: u32 = 64u; // Voxelize's workgroup size
@@ -54,6 +57,7 @@ fn word_range(z: vec2f) -> vec2u {
 
 @compute @workgroup_size(64)
 fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    f = frame_in;
     // Meshes past the adapter's largest binding come in chunks: `tris` is this chunk's, and the
     // records hold indices into it.
     let tri = id.x + id.y * groups.x * 64u;
@@ -88,6 +92,7 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
 
 @compute @workgroup_size(1)
 fn cull_finish() {
+    f = frame_in;
     atomicAdd(&counters[4], atomicLoad(&counters[0]));
 }
 
@@ -110,6 +115,7 @@ fn scan_partial(lid: u32) {
 
 @compute @workgroup_size(256)
 fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+    f = frame_in;
     if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
     // Dispatched for every triangle of the chunk: blocks past the kept ones have nothing to do.
     if (wg.x >= workgroupUniformLoad(&block_count)) { return; }
@@ -141,6 +147,7 @@ fn sat_add(a: u32, b: u32) -> u32 {
 
 @compute @workgroup_size(256)
 fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
+    f = frame_in;
     if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
     // The loop holds barriers: its bound must be uniform across the workgroup.
     let n = workgroupUniformLoad(&block_count);

@@ -28,11 +28,14 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> grid: array<u32>;
 @group(0) @binding(2) var<storage, read> table: array<vec4f>;
 @group(0) @binding(3) var distance: texture_2d<f32>;
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 // ---- point light: the scatter table ----------------------------------------------------------
 
@@ -256,6 +259,7 @@ fn ray_base(x: u32, y: u32) -> u32 {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
+    f = frame_in;
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
     if ((f.image.w & FLAG_NO_SCATTER) != 0u) {
         textureStore(scatter_out, vec2i(id.xy), vec4f(0.0, 0.0, 0.0, 1.0));

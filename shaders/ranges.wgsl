@@ -12,10 +12,13 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var distance: texture_2d<f32>;
 // [0]: max visible z (float bits), [1], [2]: the final z_lo, z_hi (float bits).
 @group(0) @binding(2) var<storage, read_write> out: array<atomic<u32>, 4>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 fn visible_z(p: vec2u) -> f32 {
     let v = pixel_dir(f, vec2f(p));
@@ -42,6 +45,7 @@ var<workgroup> group_max: atomic<u32>;
 // One atomic per workgroup on the result: 64 per pixel block on one address serialise badly.
 @compute @workgroup_size(8, 8)
 fn reduce(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
+    f = frame_in;
     if (lid == 0u) { atomicStore(&group_max, 0u); }
     workgroupBarrier();
     if (id.x < f.image.x && id.y < f.image.y) {
@@ -53,6 +57,7 @@ fn reduce(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_in
 
 @compute @workgroup_size(1)
 fn finish() {
+    f = frame_in;
     let lo = f.ranges.z;
     let hi = f.ranges.w;
     // Half a percent of margin: the depth is per pixel centre, a neighbour's ray may reach a bit further.

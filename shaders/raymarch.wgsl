@@ -34,12 +34,17 @@ struct March {
     params: vec4u,
 }
 
-@group(0) @binding(0) var<storage, read> f: Frame;
-@group(0) @binding(1) var<storage, read> shadow: ShadowFaces;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
+@group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
 @group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
 @group(0) @binding(3) var distance: texture_2d<f32>;
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(5) var<storage, read> march: March;
+@group(0) @binding(5) var<storage, read> march_in: March;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
+var<private> shadow: ShadowFaces;
+var<private> march: March;
 
 // 1 when the light reaches p: one nearest-texel lookup.
 fn lit(p: vec3f) -> f32 {
@@ -133,6 +138,9 @@ fn march_directional(v: vec3f, t_s: f32, u: f32) -> vec3f {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
+    f = frame_in;
+    shadow = shadow_in;
+    march = march_in;
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
     let v = pixel_dir(f, vec2f(id.xy));
     let t_s = textureLoad(distance, vec2i(id.xy), 0).x;

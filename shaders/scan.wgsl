@@ -9,11 +9,15 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read_write> grid: array<u32>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u) {
+    f = frame_in;
     let planes = f.grid.x;
     let rays = f.grid.y;
     let words = f.grid.w;

@@ -21,8 +21,11 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read_write> table: array<vec4f>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
     let s = sin(gamma + psi);
@@ -42,6 +45,7 @@ fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u) {
+    f = frame_in;
     let rows = f.table.x;
     let cols = f.table.y;
     let j = id.x;

@@ -14,9 +14,13 @@
 #import common
 #import shadow_lookup
 
-@group(0) @binding(0) var<storage, read> f: Frame;
-@group(0) @binding(1) var<storage, read> shadow: ShadowFaces;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
+@group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
 @group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
+var<private> shadow: ShadowFaces;
 
 struct VsOut {
     @builtin(position) clip: vec4f,
@@ -31,6 +35,8 @@ struct FsOut {
 
 @vertex
 fn vs_main(@location(0) position: vec3f, @location(1) albedo: vec3f) -> VsOut {
+    f = frame_in;
+    shadow = shadow_in;
     var o: VsOut;
     o.clip = f.view_proj * vec4f(position, 1.0);
     o.world = position;
@@ -63,6 +69,8 @@ fn slope_bias(texel: f32, cos_i: f32) -> f32 {
 
 @fragment
 fn fs_main(i: VsOut) -> FsOut {
+    f = frame_in;
+    shadow = shadow_in;
     let to_eye = f.eye.xyz - i.world;
     var n = normalize(cross(dpdx(i.world), dpdy(i.world)));
     if (dot(n, to_eye) < 0.0) { n = -n; }

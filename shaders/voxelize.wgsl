@@ -24,7 +24,7 @@
 
 #import common
 
-@group(0) @binding(0) var<storage, read> f: Frame;
+@group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 @group(0) @binding(2) var<storage, read_write> grid: array<atomic<u32>>;
 // Written by the Cull pass (cull.wgsl).
@@ -32,6 +32,9 @@
 @group(0) @binding(4) var<storage, read> offsets: array<u32>;
 @group(0) @binding(5) var<storage, read> blocks: array<u32>;
 @group(0) @binding(6) var<storage, read> counters: array<u32, 8>;
+
+// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+var<private> f: Frame;
 
 const BLOCK: u32 = 1024u;
 
@@ -159,6 +162,7 @@ fn main(
     @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) lid: u32,
 ) {
+    f = frame_in;
     let item = (wg.y * groups.x + wg.x) * 64u + lid;
     if (item >= counters[3]) { return; }
     let found = find_item(item);

@@ -12,7 +12,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Composite's bind group (composite.wgsl).
     CompositeBindings {
-        f: Kind::Storage,
+        frame_in: Kind::Storage,
         surface: Kind::Texture,
         distance: Kind::Texture,
         scatter: Kind::Texture,

@@ -15,7 +15,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Cull's bind group for one chunk of triangles (cull.wgsl).
     CullBindings {
-        f: Kind::Storage,
+        frame_in: Kind::Storage,
         tris: Kind::Storage,
         records: Kind::StorageRw,
         offsets: Kind::StorageRw,
@@ -131,7 +131,7 @@ impl Cull {
             .nonempty_chunks()
             .map(|(i, tris, n)| {
                 let b = CullBindings {
-                    f: frame.as_entire_binding(),
+                    frame_in: frame.as_entire_binding(),
                     tris: tris.as_entire_binding(),
                     records: l.records.as_entire_binding(),
                     offsets: l.offsets.as_entire_binding(),

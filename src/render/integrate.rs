@@ -15,7 +15,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Integrate's bind group (integrate.wgsl).
     IntegrateBindings {
-        f: Kind::Storage,
+        frame_in: Kind::Storage,
         grid: Kind::Storage,
         table: Kind::Storage,
         distance: Kind::Texture,

@@ -461,14 +461,14 @@ impl Renderer {
         let frame = || self.frame_buffer.as_entire_binding();
         let shadow = || self.shadow_uniforms.as_entire_binding();
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
-        p.surface.bind(d, SurfaceBindings { f: frame(), shadow: shadow(), shadow_map: shadow_map.clone() });
+        p.surface.bind(d, SurfaceBindings { frame_in: frame(), shadow_in: shadow(), shadow_map: shadow_map.clone() });
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
-        p.scan.bind(d, ScanBindings { f: frame(), grid: bits.as_entire_binding() });
+        p.scan.bind(d, ScanBindings { frame_in: frame(), grid: bits.as_entire_binding() });
         p.scatter_table.bind(d, &self.frame_buffer);
         let integrate = IntegrateBindings {
-            f: frame(),
+            frame_in: frame(),
             grid: bits.as_entire_binding(),
             table: p.scatter_table.table.as_entire_binding(),
             distance: R::TextureView(&t.distance),
@@ -477,16 +477,16 @@ impl Renderer {
         p.integrate.bind(d, integrate);
         let march = p.raymarch.uniforms.clone();
         let raymarch = RaymarchBindings {
-            f: frame(),
-            shadow: shadow(),
+            frame_in: frame(),
+            shadow_in: shadow(),
             shadow_map,
             distance: R::TextureView(&t.distance),
             scatter_out: R::TextureView(&t.scatter_view),
-            march: march.as_entire_binding(),
+            march_in: march.as_entire_binding(),
         };
         p.raymarch.bind(d, raymarch);
         let composite = CompositeBindings {
-            f: frame(),
+            frame_in: frame(),
             surface: R::TextureView(&t.radiance),
             distance: R::TextureView(&t.distance),
             scatter: R::TextureView(&t.scatter_view),

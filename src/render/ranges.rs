@@ -8,7 +8,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Ranges' bind group (ranges.wgsl; `out` is the pass's own result buffer).
-    RangesBindings { f: Kind::Storage, distance: Kind::Texture, out: Kind::StorageRw }
+    RangesBindings { frame_in: Kind::Storage, distance: Kind::Texture, out: Kind::StorageRw }
 }
 
 pub struct Ranges {
@@ -50,7 +50,7 @@ impl Ranges {
     /// (Re)binds the inputs; called when the targets change.
     pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, distance: &wgpu::TextureView) {
         let b = RangesBindings {
-            f: frame.as_entire_binding(),
+            frame_in: frame.as_entire_binding(),
             distance: wgpu::BindingResource::TextureView(distance),
             out: self.result.as_entire_binding(),
         };

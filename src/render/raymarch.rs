@@ -24,12 +24,12 @@ use glam::UVec4;
 bindings! {
     /// Raymarch's bind group (raymarch.wgsl; `march` is the pass's own uniform buffer).
     RaymarchBindings {
-        f: Kind::Storage,
-        shadow: Kind::Storage,
+        frame_in: Kind::Storage,
+        shadow_in: Kind::Storage,
         shadow_map: Kind::TextureArray,
         distance: Kind::Texture,
         scatter_out: Kind::StorageTexture(Raymarch::OUTPUT),
-        march: Kind::Storage,
+        march_in: Kind::Storage,
     }
 }
 
@@ -77,7 +77,7 @@ impl Raymarch {
     /// (Re)binds the inputs; called when the targets or the shadow map change. `b.march` is
     /// ignored: the pass binds its own uniforms.
     pub fn bind(&mut self, device: &wgpu::Device, b: RaymarchBindings) {
-        let b = RaymarchBindings { march: self.uniforms.as_entire_binding(), ..b };
+        let b = RaymarchBindings { march_in: self.uniforms.as_entire_binding(), ..b };
         self.bind_group = Some(b.bind(device, "Raymarch::bind_group", &self.layout));
     }
 

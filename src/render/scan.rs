@@ -8,7 +8,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Scan's bind group (scan.wgsl).
-    ScanBindings { f: Kind::Storage, grid: Kind::StorageRw }
+    ScanBindings { frame_in: Kind::Storage, grid: Kind::StorageRw }
 }
 
 pub struct Scan {

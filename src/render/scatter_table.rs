@@ -13,7 +13,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// ScatterTable's bind group (scatter_table.wgsl).
-    ScatterTableBindings { f: Kind::Storage, table: Kind::StorageRw }
+    ScatterTableBindings { frame_in: Kind::Storage, table: Kind::StorageRw }
 }
 
 pub struct ScatterTable {
@@ -49,7 +49,7 @@ impl ScatterTable {
 
     /// Binds the frame uniforms and its own table (once).
     pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer) {
-        let b = ScatterTableBindings { f: frame.as_entire_binding(), table: self.table.as_entire_binding() };
+        let b = ScatterTableBindings { frame_in: frame.as_entire_binding(), table: self.table.as_entire_binding() };
         self.bind_group = Some(b.bind(device, "ScatterTable::bind_group", &self.layout));
     }
 

@@ -11,7 +11,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Surface's bind group (surface.wgsl).
-    SurfaceBindings { f: Kind::Storage, shadow: Kind::Storage, shadow_map: Kind::TextureArray }
+    SurfaceBindings { frame_in: Kind::Storage, shadow_in: Kind::Storage, shadow_map: Kind::TextureArray }
 }
 
 /// The pass's render targets, `width x height`.

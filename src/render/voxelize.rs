@@ -16,7 +16,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 bindings! {
     /// Voxelize's bind group for one chunk of triangles (voxelize.wgsl).
     VoxelizeBindings {
-        f: Kind::Storage,
+        frame_in: Kind::Storage,
         tris: Kind::Storage,
         grid: Kind::StorageRw,
         records: Kind::Storage,
@@ -58,7 +58,7 @@ impl Voxelize {
             .nonempty_chunks()
             .map(|(i, tris, _)| {
                 let b = VoxelizeBindings {
-                    f: frame.as_entire_binding(),
+                    frame_in: frame.as_entire_binding(),
                     tris: tris.as_entire_binding(),
                     grid: grid.as_entire_binding(),
                     records: l.records.as_entire_binding(),
