@@ -12,6 +12,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("common.wgsl", include_str!("../../shaders/common.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("shadow_map.wgsl", include_str!("../../shaders/shadow_map.wgsl")),
+    ("shadow_cull.wgsl", include_str!("../../shaders/shadow_cull.wgsl")),
     ("voxelize.wgsl", include_str!("../../shaders/voxelize.wgsl")),
     ("scan.wgsl", include_str!("../../shaders/scan.wgsl")),
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),

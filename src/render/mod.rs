@@ -37,7 +37,7 @@ pub use raymarch::{Raymarch, RaymarchBindings, RaymarchUniforms};
 pub use scan::{Scan, ScanBindings};
 pub use scatter_table::{ScatterTable, ScatterTableBindings};
 pub use scene_gpu::SceneGpu;
-pub use shadow_map::{FaceUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms};
+pub use shadow_map::{FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms};
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
@@ -220,6 +220,9 @@ pub struct Renderer {
     passes: Passes,
     /// Fit the frame's work to what it needs (DESIGN section 6); `false` is `--no-prune`.
     pub prune: bool,
+    /// Point lights: each cube face draws only the triangles that can reach it (on by default;
+    /// off only to compare, `tests/shadow_faces.rs`).
+    pub shadow_face_culling: bool,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -263,6 +266,7 @@ impl Renderer {
             ctx,
             passes,
             prune: true,
+            shadow_face_culling: true,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -293,6 +297,12 @@ impl Renderer {
     }
 
     /// Texels per side of each shadow-map layer.
+    /// Whether the last frame's geometry could have its cube faces culled (see
+    /// [`Renderer::shadow_face_culling`]).
+    pub fn shadow_face_lists(&self) -> bool {
+        self.passes.shadow_map.has_face_lists()
+    }
+
     pub fn shadow_map_size(&self) -> u32 {
         self.passes.shadow_map.size
     }
@@ -460,6 +470,7 @@ impl Renderer {
         use wgpu::BindingResource as R;
         let frame = || self.frame_buffer.as_entire_binding();
         let shadow = || self.shadow_uniforms.as_entire_binding();
+        p.shadow_map.bind(d, &geometry.gpu);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
         p.surface.bind(d, SurfaceBindings { frame_in: frame(), shadow_in: shadow(), shadow_map: shadow_map.clone() });
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
@@ -552,7 +563,7 @@ impl Renderer {
             t.begin(&mut f.enc);
         }
         // The frame: an ordered list of passes.
-        p.shadow_map.record(queue, &mut f.enc, v, scene, &geometry.gpu);
+        p.shadow_map.record(queue, &mut f.enc, v, scene, &geometry.gpu, self.shadow_face_culling);
         f.mark(Pass::ShadowMap);
         let targets = SurfaceTargets { radiance: &t.radiance, distance: &t.distance, depth: &t.depth };
         p.surface.record(&mut f.enc, v, &geometry.gpu, targets);
@@ -725,6 +736,12 @@ mod layout_tests {
     fn shadow_uniforms_match_wgsl() {
         check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());
         check(
+            "shadow_cull.wgsl",
+            "ShadowCull",
+            fields!(ShadowCullUniforms: light, counts),
+            size_of::<ShadowCullUniforms>(),
+        );
+        check(
             "surface.wgsl",
             "ShadowFaces",
             fields!(ShadowUniforms: view_proj, params, origin),
@@ -775,6 +792,7 @@ mod binding_tests {
     #[test]
     fn every_pass_declares_the_bindings_of_its_shader() {
         check("shadow_map.wgsl", ShadowMapBindings::SLOTS);
+        check("shadow_cull.wgsl", ShadowCullBindings::SLOTS);
         check("surface.wgsl", SurfaceBindings::SLOTS);
         check("ranges.wgsl", RangesBindings::SLOTS);
         check("cull.wgsl", CullBindings::SLOTS);
@@ -792,8 +810,9 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 10] = [
+        let passes: [(&str, &[(&str, Kind)]); 11] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
+            ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
             ("ranges.wgsl", RangesBindings::SLOTS),
             ("cull.wgsl", CullBindings::SLOTS),

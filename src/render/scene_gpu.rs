@@ -54,7 +54,8 @@ impl SceneGpu {
         let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("SceneGpu::vertices"),
             contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
+            // STORAGE: the shadow map's face culling reads the positions.
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
         });
         let index_count = indices.len() as u32;
         if indices.is_empty() {
@@ -63,7 +64,7 @@ impl SceneGpu {
         let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("SceneGpu::indices"),
             contents: bytemuck::cast_slice(&indices),
-            usage: wgpu::BufferUsages::INDEX,
+            usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
         });
         let per_chunk = (max_binding / Self::TRIANGLE_BYTES).clamp(1, u32::MAX as u64) as usize;
         let chunks: Vec<(wgpu::Buffer, u32)> = tris

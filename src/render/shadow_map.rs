@@ -3,6 +3,12 @@
 //! Point light: a cube of six 90-degree faces around the light storing `|P - L|`. Directional
 //! light: one orthographic view along `-w` over the scene's bounding sphere storing the distance
 //! from a plane beyond the scene. The surface pass compares against it with a small bias.
+//!
+//! Face culling (point light): a compute pass (`shaders/shadow_cull.wgsl`) first lists, per face,
+//! the triangles that can reach its 90-degree pyramid, and each face draws only its list
+//! (`draw_indexed_indirect`). Without it every face draws every triangle: six times the vertex
+//! work, which on llvmpipe is single-threaded and was the largest cost of big scenes under a
+//! point light. Skipped (every face draws all) when the lists would not fit a storage binding.
 
 use super::scene_gpu::SceneGpu;
 use super::util::{bindings, scene_vertex_layout, texture_2d, Kind};
@@ -16,6 +22,39 @@ use glam::{Mat4, Vec3, Vec4};
 bindings! {
     /// One face's bind group (shadow_map.wgsl).
     ShadowMapBindings { face: Kind::Uniform }
+}
+
+bindings! {
+    /// The face culling's bind group (shadow_cull.wgsl).
+    ShadowCullBindings {
+        cull_in: Kind::Storage,
+        vertices: Kind::Storage,
+        indices: Kind::Storage,
+        lists: Kind::StorageRw,
+        args: Kind::StorageRw,
+    }
+}
+
+/// The face culling's parameters (`struct ShadowCull` in shadow_cull.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct ShadowCullUniforms {
+    /// xyz: the light's position.
+    pub light: Vec4,
+    /// x: triangles, y: indices per face region (the scene's index count).
+    pub counts: [u32; 4],
+}
+
+/// What face culling holds for one scene's geometry.
+struct FaceLists {
+    /// Six regions of the scene's index count; face k's starts at `k * index_count`.
+    lists: wgpu::Buffer,
+    /// Six DrawIndexedIndirect arguments, reset from `args_init` each frame.
+    args: wgpu::Buffer,
+    args_init: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    triangles: u32,
+    index_count: u32,
 }
 
 /// One face's uniforms (`struct Face` in the WGSL).
@@ -49,6 +88,11 @@ pub struct ShadowMap {
     depth: wgpu::TextureView,
     /// Per face: its uniforms, their bind group and the map layer it renders into.
     faces: Vec<(wgpu::Buffer, wgpu::BindGroup, wgpu::TextureView)>,
+    cull_layout: wgpu::BindGroupLayout,
+    cull_pipeline: wgpu::ComputePipeline,
+    cull_uniforms: wgpu::Buffer,
+    /// `None` until bound, or when the lists would not fit a storage binding.
+    face_lists: Option<FaceLists>,
 }
 
 impl ShadowMap {
@@ -109,6 +153,27 @@ impl ShadowMap {
                 (buf, bg, view)
             })
             .collect();
+        let cull_module = lib.module(device, "shadow_cull.wgsl")?;
+        let cull_layout = ShadowCullBindings::layout(device, "ShadowMap::cull_layout", wgpu::ShaderStages::COMPUTE);
+        let cull_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ShadowMap::cull_pipeline_layout"),
+            bind_group_layouts: &[Some(&cull_layout)],
+            immediate_size: 0,
+        });
+        let cull_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("ShadowMap::cull_pipeline"),
+            layout: Some(&cull_pl),
+            module: &cull_module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let cull_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ShadowMap::cull_uniforms"),
+            size: std::mem::size_of::<ShadowCullUniforms>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         Ok(ShadowMap {
             module,
             pipeline_layout: pl,
@@ -118,7 +183,62 @@ impl ShadowMap {
             map_view,
             depth,
             faces,
+            cull_layout,
+            cull_pipeline,
+            cull_uniforms,
+            face_lists: None,
         })
+    }
+
+    /// Whether the faces can be culled for the bound geometry (the lists fit a storage binding).
+    pub fn has_face_lists(&self) -> bool {
+        self.face_lists.is_some()
+    }
+
+    /// Makes the face lists for `geometry` (after it changed). Without room for them in one
+    /// storage binding the faces draw every triangle.
+    pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu) {
+        let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        let index_bytes = geometry.index_count as u64 * 4;
+        self.face_lists = None;
+        if geometry.index_count == 0 || 6 * index_bytes > limit || geometry.vertices.size() > limit {
+            return;
+        }
+        let lists = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ShadowMap::face_lists"),
+            size: 6 * index_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX,
+            mapped_at_creation: false,
+        });
+        let init: Vec<u32> = (0..6u32).flat_map(|k| [0, 1, k * geometry.index_count, 0, 0]).collect();
+        use wgpu::util::DeviceExt;
+        let args_init = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ShadowMap::face_args_init"),
+            contents: bytemuck::cast_slice(&init),
+            usage: wgpu::BufferUsages::COPY_SRC,
+        });
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ShadowMap::face_args"),
+            size: args_init.size(),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = ShadowCullBindings {
+            cull_in: self.cull_uniforms.as_entire_binding(),
+            vertices: geometry.vertices.as_entire_binding(),
+            indices: geometry.indices.as_entire_binding(),
+            lists: lists.as_entire_binding(),
+            args: args.as_entire_binding(),
+        }
+        .bind(device, "ShadowMap::cull_bind_group", &self.cull_layout);
+        self.face_lists = Some(FaceLists {
+            lists,
+            args,
+            args_init,
+            bind_group,
+            triangles: geometry.index_count / 3,
+            index_count: geometry.index_count,
+        });
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -215,10 +335,30 @@ impl ShadowMap {
         variant: Variant,
         scene: &Scene,
         geometry: &SceneGpu,
+        face_culling: bool,
     ) {
         // Renderer::render_frame prepares every variant it records.
         let Some(pipeline) = self.pipelines.get(variant) else { return };
         let (faces, _, count) = self.uniforms(scene);
+        let culled = match (&self.face_lists, scene.light) {
+            (Some(fl), Light::Point { position, .. }) if face_culling && count == 6 => {
+                let u = ShadowCullUniforms { light: position.extend(1.0), counts: [fl.triangles, fl.index_count, 0, 0] };
+                queue.write_buffer(&self.cull_uniforms, 0, bytemuck::bytes_of(&u));
+                encoder.copy_buffer_to_buffer(&fl.args_init, 0, &fl.args, 0, fl.args_init.size());
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("ShadowMap::cull_pass"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.cull_pipeline);
+                pass.set_bind_group(0, &fl.bind_group, &[]);
+                // 64 triangles a workgroup, spread over y past the 65 535 limit on x.
+                let groups = fl.triangles.div_ceil(64).max(1);
+                let x = groups.min(65_535);
+                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+                Some(fl)
+            }
+            _ => None,
+        };
         for (i, face) in faces.iter().enumerate().take(count) {
             let (uniforms, bind_group, view) = &self.faces[i];
             queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
@@ -245,8 +385,16 @@ impl ShadowMap {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-            pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..geometry.index_count, 0, 0..1);
+            match culled {
+                Some(fl) => {
+                    pass.set_index_buffer(fl.lists.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed_indirect(&fl.args, 20 * i as u64);
+                }
+                None => {
+                    pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..geometry.index_count, 0, 0..1);
+                }
+            }
         }
     }
 }

@@ -1,0 +1,65 @@
+// shadow_cull.wgsl: which faces of a point light's cube shadow map each triangle can touch, so
+// that each face draws only those (ShadowMap pass, point lights; `src/render/shadow_map.rs`).
+//
+// Face k looks along axis c = k / 2 with sign s (+X, -X, +Y, -Y, +Z, -Z, the order of the faces'
+// matrices). With q = P - L, its 90-degree pyramid is s q_c >= |q_u| and s q_c >= |q_v| for the
+// two other axes: four planes through the light. The pyramid is convex, so a triangle whose three
+// vertices all lie outside one of the planes cannot reach the face; every other triangle is kept
+// (conservative: a kept triangle the face's frustum then clips costs only its vertices). Kept
+// triangles' indices are appended to face k's region of `lists` and counted into its
+// DrawIndexedIndirect arguments.
+
+struct ShadowCull {
+    // xyz: the light's position.
+    light: vec4f,
+    // x: triangles, y: indices per region (the scene's index count), zw: unused.
+    counts: vec4u,
+}
+
+@group(0) @binding(0) var<storage, read> cull_in: ShadowCull;
+// The scene's vertex buffer: [x, y, z, r, g, b] per vertex.
+@group(0) @binding(1) var<storage, read> vertices: array<f32>;
+@group(0) @binding(2) var<storage, read> indices: array<u32>;
+// Six regions of `counts.y` indices, face k's from k * counts.y.
+@group(0) @binding(3) var<storage, read_write> lists: array<u32>;
+// Six DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
+// instance); the index counts start at 0 each frame.
+@group(0) @binding(4) var<storage, read_write> args: array<atomic<u32>, 30>;
+
+fn position(i: u32) -> vec3f {
+    return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
+}
+
+// The four plane values of q for face k (>= 0 inside), with a margin for rounding.
+fn planes(q: vec3f, k: u32) -> vec4f {
+    let c = k / 2u;
+    let s = select(1.0, -1.0, (k & 1u) == 1u);
+    let m = s * q[c];
+    let u = q[(c + 1u) % 3u];
+    let v = q[(c + 2u) % 3u];
+    // f32 rounding of the faces' matrices must never cut a triangle the rasterizer would draw.
+    let margin = 1e-5 * (abs(m) + abs(u) + abs(v));
+    return vec4f(m - u, m + u, m - v, m + v) + margin;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let t = id.x + id.y * groups.x * 64u;
+    if (t >= cull_in.counts.x) { return; }
+    let l = cull_in.light.xyz;
+    let i0 = indices[3u * t];
+    let i1 = indices[3u * t + 1u];
+    let i2 = indices[3u * t + 2u];
+    let q0 = position(i0) - l;
+    let q1 = position(i1) - l;
+    let q2 = position(i2) - l;
+    for (var k = 0u; k < 6u; k++) {
+        let outside = planes(q0, k) < vec4f(0.0) & planes(q1, k) < vec4f(0.0) & planes(q2, k) < vec4f(0.0);
+        if (any(outside)) { continue; }
+        let at = atomicAdd(&args[5u * k], 3u);
+        let base = k * cull_in.counts.y + at;
+        lists[base] = i0;
+        lists[base + 1u] = i1;
+        lists[base + 2u] = i2;
+    }
+}
