@@ -52,7 +52,9 @@ fn culled_faces_shadow_what_every_face_drawing_everything_shadows() {
     s.grid = Grid { planes: 64, rays: 64, bins: 32, ..Grid::default() };
     let b = s.bounds();
     let (lo, hi) = (b.min, b.max);
-    for light in [Vec3::new(lo.x, lo.y, lo.z) + 1e-3, Vec3::new(0.0, hi.y * 0.5, 0.0), Vec3::new(lo.x * 0.5, hi.y * 0.9, 0.0)] {
+    for light in
+        [Vec3::new(lo.x, lo.y, lo.z) + 1e-3, Vec3::new(0.0, hi.y * 0.5, 0.0), Vec3::new(lo.x * 0.5, hi.y * 0.9, 0.0)]
+    {
         s.light = point_light(light);
         let (differ, max) = difference(&s, Method::Vsv);
         assert_eq!(differ, 0, "light at {light}: {differ} pixels differ (max {max})");

@@ -489,30 +489,31 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     let mut best: Vec<(&'static str, f64, crate::image::Image)> = Vec::new();
     let mut first_failure = None;
     let chase_map = CHASE_MAP.min(renderer.ctx.device.limits().max_texture_dimension_2d);
-    let mut measure_point = |p: &Point, frames: usize, rows: &mut Vec<Row>, notes: &mut Vec<String>| -> Result<(), BenchError> {
-        bar.set_message(format!("{} {}", p.method_name(), p.setting()));
-        match measure(renderer, &mut work, w, h, p, opts.warmup, frames) {
-            Ok((timing, o)) => {
-                let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
-                let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
-                let name = p.method_name();
-                match best.iter_mut().find(|b| b.0 == name) {
-                    Some(b) if scatter.rel_rmse < b.1 => *b = (name, scatter.rel_rmse, o.scatter),
-                    Some(_) => {}
-                    None => best.push((name, scatter.rel_rmse, o.scatter)),
+    let mut measure_point =
+        |p: &Point, frames: usize, rows: &mut Vec<Row>, notes: &mut Vec<String>| -> Result<(), BenchError> {
+            bar.set_message(format!("{} {}", p.method_name(), p.setting()));
+            match measure(renderer, &mut work, w, h, p, opts.warmup, frames) {
+                Ok((timing, o)) => {
+                    let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
+                    let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
+                    let name = p.method_name();
+                    match best.iter_mut().find(|b| b.0 == name) {
+                        Some(b) if scatter.rel_rmse < b.1 => *b = (name, scatter.rel_rmse, o.scatter),
+                        Some(_) => {}
+                        None => best.push((name, scatter.rel_rmse, o.scatter)),
+                    }
+                    rows.push(Row { point: *p, timing, scatter, hdr });
                 }
-                rows.push(Row { point: *p, timing, scatter, hdr });
+                Err(e) => {
+                    let msg = format!("{} {}: skipped, it failed: {e}", p.method_name(), p.setting());
+                    bar.println(&msg);
+                    first_failure.get_or_insert_with(|| msg.clone());
+                    notes.push(msg);
+                }
             }
-            Err(e) => {
-                let msg = format!("{} {}: skipped, it failed: {e}", p.method_name(), p.setting());
-                bar.println(&msg);
-                first_failure.get_or_insert_with(|| msg.clone());
-                notes.push(msg);
-            }
-        }
-        bar.inc(1);
-        Ok(())
-    };
+            bar.inc(1);
+            Ok(())
+        };
     for p in &points {
         measure_point(p, opts.frames, &mut rows, &mut notes)?;
     }
@@ -524,7 +525,9 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         let target = rows.iter().find(|r| r.point == default_grid).map(|r| r.scatter.rel_rmse);
         let march_best = |rows: &[Row]| {
             rows.iter()
-                .filter(|r| matches!(r.point.method, Method::Raymarch { jitter: false, .. }) && r.point.shadow_map == chase_map)
+                .filter(|r| {
+                    matches!(r.point.method, Method::Raymarch { jitter: false, .. }) && r.point.shadow_map == chase_map
+                })
                 .min_by(|a, b| a.scatter.rel_rmse.total_cmp(&b.scatter.rel_rmse))
                 .map(|r| (r.point, r.scatter.rel_rmse))
         };

@@ -37,7 +37,9 @@ pub use raymarch::{Raymarch, RaymarchBindings, RaymarchUniforms};
 pub use scan::{Scan, ScanBindings};
 pub use scatter_table::{ScatterTable, ScatterTableBindings};
 pub use scene_gpu::SceneGpu;
-pub use shadow_map::{FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms};
+pub use shadow_map::{
+    FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms,
+};
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};

@@ -342,7 +342,8 @@ impl ShadowMap {
         let (faces, _, count) = self.uniforms(scene);
         let culled = match (&self.face_lists, scene.light) {
             (Some(fl), Light::Point { position, .. }) if face_culling && count == 6 => {
-                let u = ShadowCullUniforms { light: position.extend(1.0), counts: [fl.triangles, fl.index_count, 0, 0] };
+                let u =
+                    ShadowCullUniforms { light: position.extend(1.0), counts: [fl.triangles, fl.index_count, 0, 0] };
                 queue.write_buffer(&self.cull_uniforms, 0, bytemuck::bytes_of(&u));
                 encoder.copy_buffer_to_buffer(&fl.args_init, 0, &fl.args, 0, fl.args_init.size());
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -92,7 +92,8 @@ impl FrameTimes {
     pub fn predict(&self, method: Method, interactive: bool, units: f64) -> f64 {
         let march = matches!(method, Method::Raymarch { .. });
         let family = || self.samples.iter().filter(|(m, ..)| *m == march);
-        let same: Vec<(f64, f64)> = family().filter(|(_, i, ..)| *i == interactive).map(|(.., u, t)| (*u, *t)).collect();
+        let same: Vec<(f64, f64)> =
+            family().filter(|(_, i, ..)| *i == interactive).map(|(.., u, t)| (*u, *t)).collect();
         let s = if same.is_empty() { family().map(|(.., u, t)| (*u, *t)).collect() } else { same };
         let (a0, b0) = self.prior;
         let prior = |u: f64| a0 + b0 * u;

@@ -373,8 +373,12 @@ impl Worker {
             return None;
         }
         let units = work_units(r.width, r.height, r.look.grid, r.method);
-        if done.is_none() && r.progressive && self.times.wants_preview(r.method, r.interactive, units, PREVIEW_BUDGET_MS) {
-            let s = self.times.preview_scale(r.width, r.height, r.look.grid, r.method, r.interactive, PREVIEW_BUDGET_MS);
+        if done.is_none()
+            && r.progressive
+            && self.times.wants_preview(r.method, r.interactive, units, PREVIEW_BUDGET_MS)
+        {
+            let s =
+                self.times.preview_scale(r.width, r.height, r.look.grid, r.method, r.interactive, PREVIEW_BUDGET_MS);
             let delivered = self.render(r, Quality::Preview(s), send);
             return (delivered && !r.interactive).then(|| r.clone());
         }
