@@ -65,15 +65,21 @@ pub struct ErrorStats {
 ///
 /// Errors: different sizes (naming both), empty images, a pixel buffer that does not match
 /// its image's size, or a reference containing non-finite values.
-pub fn compare(test: &Image, reference: &Image) -> Result<ErrorStats, MetricsError> {
-    if (test.width, test.height) != (reference.width, reference.height) {
-        return Err(MetricsError::SizeMismatch {
-            test_width: test.width,
-            test_height: test.height,
-            ref_width: reference.width,
-            ref_height: reference.height,
-        });
+/// `SizeMismatch` (naming both sizes) unless `test` and `reference` have the same size.
+fn same_size(test: &Image, reference: &Image) -> Result<(), MetricsError> {
+    if (test.width, test.height) == (reference.width, reference.height) {
+        return Ok(());
     }
+    Err(MetricsError::SizeMismatch {
+        test_width: test.width,
+        test_height: test.height,
+        ref_width: reference.width,
+        ref_height: reference.height,
+    })
+}
+
+pub fn compare(test: &Image, reference: &Image) -> Result<ErrorStats, MetricsError> {
+    same_size(test, reference)?;
     for (which, img) in [("test", test), ("reference", reference)] {
         let expected = (img.width as usize).checked_mul(img.height as usize);
         if expected != Some(img.pixels.len()) {
@@ -186,14 +192,7 @@ impl fmt::Display for ErrorStats {
 /// eye; the difference panel shows `|a - b|` times `gain` on a black-blue-magenta-yellow ramp
 /// (yellow: a difference of 1 / gain of that white or more).
 pub fn comparison_picture(a: &Image, b: &Image, gain: f32) -> Result<(u32, u32, Vec<u8>), MetricsError> {
-    if (a.width, a.height) != (b.width, b.height) {
-        return Err(MetricsError::SizeMismatch {
-            test_width: a.width,
-            test_height: a.height,
-            ref_width: b.width,
-            ref_height: b.height,
-        });
-    }
+    same_size(a, b)?;
     let lum = |p: &[f32; 3]| (p[0] + p[1] + p[2]) / 3.0;
     let mut l: Vec<f32> = b.pixels.iter().map(lum).filter(|v| v.is_finite()).collect();
     l.sort_by(|x, y| x.total_cmp(y));

@@ -197,19 +197,22 @@ fn fuzz(seed: &str, n: usize, rng_seed: u64, check: impl Fn(&Path) -> Result<(),
     failures
 }
 
+/// A refusal passes when its message names the file.
+fn names_the_file(name: &str, e: impl std::fmt::Display) -> Result<(), String> {
+    let msg = e.to_string();
+    if msg.contains(name) {
+        Ok(())
+    } else {
+        Err(format!("the error does not name {name}: {msg}"))
+    }
+}
+
 /// A scene either loads valid, or fails with a message naming the file.
 fn scene_check(path: &Path) -> Result<(), String> {
     let name = path.file_name().unwrap().to_string_lossy().into_owned();
     match load_scene(path) {
         Ok(s) => s.validate().map_err(|e| format!("loaded an invalid scene: {e}")),
-        Err(e) => {
-            let msg = e.to_string();
-            if msg.contains(&name) {
-                Ok(())
-            } else {
-                Err(format!("the error does not name {name}: {msg}"))
-            }
-        }
+        Err(e) => names_the_file(&name, e),
     }
 }
 
@@ -220,14 +223,7 @@ fn preset_check(path: &Path) -> Result<(), String> {
             // A preset that loads can be written and read back.
             Preset::parse(&p.to_toml(), path).map(|_| ()).map_err(|e| format!("does not round-trip: {e}"))
         }
-        Err(e) => {
-            let msg = e.to_string();
-            if msg.contains(&name) {
-                Ok(())
-            } else {
-                Err(format!("the error does not name {name}: {msg}"))
-            }
-        }
+        Err(e) => names_the_file(&name, e),
     }
 }
 

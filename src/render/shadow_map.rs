@@ -47,6 +47,9 @@ pub struct ShadowCullUniforms {
 
 /// What face culling holds for one scene's geometry.
 struct FaceLists {
+    /// The scene index buffer the lists were made for (they are remade only when it changes,
+    /// not when the image or the grid does).
+    source: wgpu::Buffer,
     /// Six regions of the scene's index count; face k's starts at `k * index_count`.
     lists: wgpu::Buffer,
     /// Six DrawIndexedIndirect arguments, reset from `args_init` each frame.
@@ -195,10 +198,13 @@ impl ShadowMap {
         self.face_lists.is_some()
     }
 
-    /// Makes the face lists for `geometry` (after it changed). Without room for them in one
-    /// storage binding the faces draw every triangle.
+    /// Makes the face lists for `geometry` unless they were made for it. Without room for them
+    /// in one storage binding the faces draw every triangle.
     pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu) {
         let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        if self.face_lists.as_ref().is_some_and(|fl| fl.source == geometry.indices) {
+            return;
+        }
         let index_bytes = geometry.index_count as u64 * 4;
         self.face_lists = None;
         if geometry.index_count == 0 || 6 * index_bytes > limit || geometry.vertices.size() > limit {
@@ -232,6 +238,7 @@ impl ShadowMap {
         }
         .bind(device, "ShadowMap::cull_bind_group", &self.cull_layout);
         self.face_lists = Some(FaceLists {
+            source: geometry.indices.clone(),
             lists,
             args,
             args_init,
