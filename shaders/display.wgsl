@@ -1,22 +1,32 @@
 // The editor's viewport: shows one of the renderer's linear RGBA32Float images inside egui's render
-// pass (an egui_wgpu paint callback), with exposure, the ACES-fitted tone curve of `src/image.rs`
-// (`tone_map_aces`) and, when the window's surface is not an sRGB format, the sRGB encoding.
+// pass (an egui_wgpu paint callback), in two steps:
 //
-// A full-screen triangle covers the callback's viewport (egui sets it to the widget's rectangle).
-// The image may be smaller than the viewport (a preview, or fewer pixels): it is filtered
-// bilinearly by hand, with four textureLoads, because RGBA32Float is not filterable everywhere.
+//   fs_tonemap  once per picture or exposure, at the picture's size, into an RGBA8 texture:
+//               c = encode_srgb(aces(exposure * hdr))   (the ACES fit of `tone_map_aces`, src/image.rs)
+//   fs_show     every UI frame, over the viewport's rectangle: that texture, filtered bilinearly
+//               (fs_show_linear decodes it to linear for an *Srgb target, which encodes on write).
+//
+// Why two: the window repaints far more often than pictures arrive (every hover and drag), and on the
+// software driver the tone curve, the sRGB encoding and four float fetches per pixel on every repaint
+// were a third of a UI frame; one 8-bit filtered fetch per pixel is what a repaint now pays. Previews
+// smaller than the viewport are filtered after the tone curve, as image viewers do.
+//
+// A full-screen triangle covers the target (egui sets the viewport to the widget's rectangle).
 
 struct Display {
     // 2^stops.
     exposure: f32,
-    // 1: the target stores linear values (an *Srgb format encodes on write); 0: encode here.
-    linear_target: u32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 };
 
+// fs_tonemap's inputs (the picture's bind group).
 @group(0) @binding(0) var<uniform> display: Display;
 @group(0) @binding(1) var image: texture_2d<f32>;
+// fs_show's inputs (the tone-mapped picture).
+@group(0) @binding(2) var shown: texture_2d<f32>;
+@group(0) @binding(3) var shown_sampler: sampler;
 
 struct VertexOut {
     @builtin(position) position: vec4<f32>,
@@ -51,26 +61,32 @@ fn encode_srgb(l: f32) -> f32 {
     return 1.055 * pow(c, 1.0 / 2.4) - 0.055;
 }
 
-// The linear image at `uv` (0..1), bilinear between the four nearest texel centres.
-fn sample_linear(uv: vec2<f32>) -> vec3<f32> {
-    let dims = vec2<i32>(textureDimensions(image));
-    let p = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)) * vec2<f32>(dims) - vec2<f32>(0.5);
-    let f = fract(p);
-    let i0 = clamp(vec2<i32>(floor(p)), vec2<i32>(0), dims - vec2<i32>(1));
-    let i1 = min(i0 + vec2<i32>(1), dims - vec2<i32>(1));
-    let a = textureLoad(image, i0, 0).rgb;
-    let b = textureLoad(image, vec2<i32>(i1.x, i0.y), 0).rgb;
-    let c = textureLoad(image, vec2<i32>(i0.x, i1.y), 0).rgb;
-    let d = textureLoad(image, i1, 0).rgb;
-    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+fn decode_srgb(e: f32) -> f32 {
+    if e <= 0.04045 {
+        return e / 12.92;
+    }
+    return pow((e + 0.055) / 1.055, 2.4);
 }
 
+// One texel of the picture per target pixel (the target has the picture's size).
 @fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let hdr = sample_linear(in.uv) * display.exposure;
-    var mapped = vec3<f32>(tone_map_aces(hdr.r), tone_map_aces(hdr.g), tone_map_aces(hdr.b));
-    if display.linear_target == 0u {
-        mapped = vec3<f32>(encode_srgb(mapped.r), encode_srgb(mapped.g), encode_srgb(mapped.b));
-    }
-    return vec4<f32>(mapped, 1.0);
+fn fs_tonemap(in: VertexOut) -> @location(0) vec4<f32> {
+    let hdr = textureLoad(image, vec2<i32>(in.position.xy), 0).rgb * display.exposure;
+    let mapped = vec3<f32>(tone_map_aces(hdr.r), tone_map_aces(hdr.g), tone_map_aces(hdr.b));
+    return vec4<f32>(encode_srgb(mapped.r), encode_srgb(mapped.g), encode_srgb(mapped.b), 1.0);
+}
+
+// The tone-mapped picture as it is (a target that stores encoded values). Kept to a plain texture
+// fetch on purpose: llvmpipe runs such a shader on its fast 8-bit path (a third of the cost of the
+// same fetch followed by a branch, measured in the window).
+@fragment
+fn fs_show(in: VertexOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureSample(shown, shown_sampler, in.uv).rgb, 1.0);
+}
+
+// The same, decoded to linear, for a target that encodes on write (an *Srgb format).
+@fragment
+fn fs_show_linear(in: VertexOut) -> @location(0) vec4<f32> {
+    let c = textureSample(shown, shown_sampler, in.uv).rgb;
+    return vec4<f32>(decode_srgb(c.r), decode_srgb(c.g), decode_srgb(c.b), 1.0);
 }

@@ -11,7 +11,7 @@ use eframe::egui;
 use eframe::egui_wgpu;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
-use epivox::editor::{Command, Editor, EditorOptions, ExposureMode, InspectorMode, Quality, ViewMode};
+use epivox::editor::{Command, Editor, EditorOptions, ExposureMode, InspectorMode, Quality, RenderPriority, ViewMode};
 use epivox::gpu::{GpuContext, GpuError, EMBEDDED};
 use epivox::params::Grid;
 use epivox::scene::{builtin_scene, Scene};
@@ -91,6 +91,9 @@ fn options(dir: &Path) -> EditorOptions {
         config_dir: Some(dir.join("config")),
         watch_shaders: false,
         shader_dir: None,
+        // The harness polls for the render on the UI thread while other tests load the same
+        // cores: a SCHED_IDLE worker could wait behind them for as long as they run.
+        render_priority: RenderPriority::Lowered,
         ..EditorOptions::default()
     }
 }

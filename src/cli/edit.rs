@@ -1,7 +1,7 @@
 //! `epivox edit` (and `epivox` with no arguments): the editor window.
 
 use anyhow::{bail, Result};
-use epivox::editor::{self, EditorOptions};
+use epivox::editor::{self, EditorOptions, RenderPriority};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Default)]
@@ -33,6 +33,9 @@ pub fn edit(args: EditArgs) -> Result<()> {
         shader_dir: args.shader_dir,
         quit_after_frames: args.quit_after_frames,
         screenshot: args.screenshot,
+        // Measuring renders back to back with no one at the window: nothing to yield to, and
+        // under a test run's load an idle-priority render would wait for the other tests.
+        render_priority: if measuring { RenderPriority::Lowered } else { RenderPriority::default() },
         ..EditorOptions::default()
     };
     let summary = editor::run(opts)?;

@@ -6,7 +6,7 @@
 use super::display::{display_layout, DisplayPipeline, ViewportResources};
 use super::document::{Document, History, Look};
 use super::files::{default_config_dir, default_presets_dir};
-use super::jobs::render::{Picture, RenderJob, Window, WorkerOptions};
+use super::jobs::render::{Picture, RenderJob, RenderPriority, Window, WorkerOptions};
 use super::jobs::watch::ShaderWatcher;
 use super::jobs::Jobs;
 use super::measure::{FrameLine, Meter};
@@ -89,12 +89,13 @@ impl Editor {
             }
             Err(e) => return Err(e.into()),
         };
-        render_state.renderer.write().callback_resources.insert(ViewportResources { display, format });
+        render_state.renderer.write().callback_resources.insert(ViewportResources::new(display));
 
         let c = ctx.clone();
         let worker = WorkerOptions {
             shared_device: opts.shared_device || std::env::var_os("EPIVOX_EDITOR_SHARED_DEVICE").is_some(),
             frame_delay: opts.frame_delay,
+            priority: RenderPriority::from_env(opts.render_priority),
         };
         let job =
             RenderJob::start(Window { gpu, layout, format }, shaders.clone(), worker, move || c.request_repaint())

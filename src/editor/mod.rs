@@ -47,7 +47,7 @@ pub use camera::CameraMode;
 pub use command::{Command, MergeKey};
 pub use document::{History, Look};
 pub use jobs::accuracy::check_options;
-pub use jobs::render::{Picture, Quality};
+pub use jobs::render::{Picture, Quality, RenderPriority};
 pub use panels::inspector::InspectorMode;
 pub use session::Message;
 pub use view::{ExposureMode, ViewMode};
@@ -86,6 +86,9 @@ pub struct EditorOptions {
     pub shared_device: bool,
     /// Tests: the render worker sleeps this long before each frame (a slow GPU on any machine).
     pub frame_delay: Option<Duration>,
+    /// How the render worker shares the CPU with the window (`EPIVOX_EDITOR_RENDER_PRIORITY`
+    /// overrides it).
+    pub render_priority: RenderPriority,
 }
 
 impl Default for EditorOptions {
@@ -101,6 +104,7 @@ impl Default for EditorOptions {
             screenshot: None,
             shared_device: false,
             frame_delay: None,
+            render_priority: RenderPriority::default(),
         }
     }
 }

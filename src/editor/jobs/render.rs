@@ -53,6 +53,20 @@ struct Shared {
     stopped: AtomicBool,
 }
 
+impl Shared {
+    /// A frame or task is being worked on or waiting (never, once the worker has stopped).
+    fn in_flight(&self) -> bool {
+        !self.stopped.load(Ordering::SeqCst)
+            && (self.busy.load(Ordering::SeqCst)
+                || self.slot.lock().map(|s| s.frame.is_some() || !s.tasks.is_empty()).unwrap_or(false))
+    }
+
+    /// The window has gone (the handle was dropped) or the worker has stopped.
+    fn over(&self) -> bool {
+        self.stopped.load(Ordering::SeqCst) || self.slot.lock().map(|s| s.quit).unwrap_or(true)
+    }
+}
+
 /// How the worker is set up (tests and measurements).
 #[derive(Debug, Clone, Default)]
 pub struct WorkerOptions {
@@ -60,6 +74,35 @@ pub struct WorkerOptions {
     pub shared_device: bool,
     /// Sleep this long before each frame (tests: a slow GPU on any machine).
     pub frame_delay: Option<Duration>,
+    /// How the worker shares the CPU with the window.
+    pub priority: RenderPriority,
+}
+
+/// How the render worker, and the driver threads its device starts (they inherit it), share the
+/// CPU with the window. On the software driver both the window's painting and the render are CPU
+/// work on the same cores; the window must come first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RenderPriority {
+    /// Linux `SCHED_IDLE`: the render runs on CPU time nothing else wants, so a UI frame never
+    /// waits behind it (a 3 s viewport drag on llvmpipe, 2 cores: UI frame p95 37–38 ms against
+    /// 39–53 ms at nice 19 and 39–59 ms at nice 10, with as many previews; docs/editor.md). The
+    /// price: while other programs keep every core busy, renders wait for them.
+    #[default]
+    Idle,
+    /// Nice +10 (at most 19): a small share under contention. Tests use it: there the UI thread
+    /// polls for the render while other tests load the same cores.
+    Lowered,
+}
+
+impl RenderPriority {
+    /// `EPIVOX_EDITOR_RENDER_PRIORITY=idle|lowered`, else `default`.
+    pub fn from_env(default: RenderPriority) -> RenderPriority {
+        match std::env::var("EPIVOX_EDITOR_RENDER_PRIORITY").as_deref() {
+            Ok("idle") => RenderPriority::Idle,
+            Ok("lowered") => RenderPriority::Lowered,
+            _ => default,
+        }
+    }
 }
 
 /// What the worker needs from the window: its device (the pictures' textures live there), the
@@ -87,6 +130,9 @@ impl RenderJob {
         let shared = Arc::new(Shared::default());
         let (tx, rx) = mpsc::channel();
         let s2 = shared.clone();
+        if opts.priority == RenderPriority::Idle {
+            starvation::guard(shared.clone());
+        }
         std::thread::Builder::new().name("epivox-render".into()).spawn(move || {
             let send = |e: RenderEvent| {
                 let _ = tx.send(e);
@@ -143,9 +189,7 @@ impl RenderJob {
 
     /// A frame or task is being worked on or waiting (never, once the worker has stopped).
     pub fn in_flight(&self) -> bool {
-        !self.shared.stopped.load(Ordering::SeqCst)
-            && (self.shared.busy.load(Ordering::SeqCst)
-                || self.shared.slot.lock().map(|s| s.frame.is_some() || !s.tasks.is_empty()).unwrap_or(false))
+        self.shared.in_flight()
     }
 }
 
@@ -165,17 +209,103 @@ enum Job {
 /// of a preview).
 const PREVIEW_SHADOW_MAP: u32 = 512;
 
-/// Lowers the calling thread's priority by 10 (at most to 19). Threads it starts inherit it — the
-/// software driver's, created with the worker's device — so on a CPU shared with the driver the
-/// UI thread comes first and the renderer takes the rest.
-fn lower_priority() {
+/// Lowers the calling thread's priority (see [`RenderPriority`]). Threads it starts inherit it —
+/// the software driver's, created with the worker's device — so on a CPU shared with the driver
+/// the UI thread comes first and the renderer takes the rest.
+fn lower_priority(priority: RenderPriority) {
     #[cfg(target_os = "linux")]
-    // SAFETY: plain system calls on the calling thread (on Linux `who = 0` with PRIO_PROCESS is
-    // the calling thread; the nice value is per thread). getpriority returns -1 both as a value
-    // and on error: either way the result below is a valid nice value.
+    // SAFETY: plain system calls on the calling thread (on Linux `who = 0` with PRIO_PROCESS, and
+    // pid 0 for sched_setscheduler, are the calling thread; both settings are per thread).
+    // getpriority returns -1 both as a value and on error: either way the result is a valid nice
+    // value. A failed SCHED_IDLE leaves the nice value in force.
     unsafe {
         let now = libc::getpriority(libc::PRIO_PROCESS, 0);
         libc::setpriority(libc::PRIO_PROCESS, 0, (now + 10).min(19));
+        if priority == RenderPriority::Idle {
+            let param = libc::sched_param { sched_priority: 0 };
+            if libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) != 0 {
+                log::warn!("the render worker could not take SCHED_IDLE; it runs at nice +10");
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = priority;
+}
+
+/// The price of [`RenderPriority::Idle`] is that a render waits while other programs keep every
+/// core busy (measured: with two busy loops on two cores, no picture at all in a minute). A guard
+/// thread at normal priority watches the worker's threads while a frame is waiting or in flight;
+/// when they get (almost) no CPU for two seconds it moves them to the normal policy at nice +10
+/// ([`RenderPriority::Lowered`]) for the rest of the session, and says so in the log.
+mod starvation {
+    use super::Shared;
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    /// Half-seconds in flight with (almost) no CPU before the worker is promoted.
+    const STARVED_TICKS: u32 = 4;
+    /// CPU time (clock ticks, 1/100 s) below which a half-second counts as starved.
+    const MIN_PROGRESS: u64 = 2;
+
+    pub fn guard(shared: Arc<Shared>) {
+        #[cfg(target_os = "linux")]
+        let _ = std::thread::Builder::new().name("epivox-render-guard".into()).spawn(move || {
+            let mut last = idle_threads(|_| {}).1;
+            let mut starved = 0;
+            while !shared.over() {
+                std::thread::sleep(Duration::from_millis(500));
+                let now = idle_threads(|_| {}).1;
+                let waiting = shared.in_flight();
+                starved = if waiting && now.saturating_sub(last) < MIN_PROGRESS { starved + 1 } else { 0 };
+                last = now;
+                if starved >= STARVED_TICKS {
+                    let (n, _) = idle_threads(promote);
+                    log::warn!(
+                        "the render worker got no CPU for 2 s (other programs keep every core busy): \
+                         its {n} threads now run at nice +10 instead of idle priority"
+                    );
+                    return;
+                }
+            }
+        });
+        #[cfg(not(target_os = "linux"))]
+        let _ = shared;
+    }
+
+    /// Calls `f` on every thread of this process that runs under SCHED_IDLE (only the worker and
+    /// the driver threads it started do); returns their number and their CPU time in clock ticks.
+    #[cfg(target_os = "linux")]
+    fn idle_threads(f: impl Fn(i32)) -> (usize, u64) {
+        let Ok(dir) = std::fs::read_dir("/proc/self/task") else { return (0, 0) };
+        let mut n = 0;
+        let mut ticks = 0;
+        for tid in dir.flatten().filter_map(|e| e.file_name().to_str().and_then(|t| t.parse::<i32>().ok())) {
+            // SAFETY: a query of another thread's policy; an ended thread gives -1.
+            if unsafe { libc::sched_getscheduler(tid) } != libc::SCHED_IDLE {
+                continue;
+            }
+            n += 1;
+            // utime and stime: fields 14 and 15 of stat, 12th and 13th after the ")" that ends
+            // the thread's name (which may itself hold spaces).
+            if let Ok(stat) = std::fs::read_to_string(format!("/proc/self/task/{tid}/stat")) {
+                if let Some((_, rest)) = stat.rsplit_once(')') {
+                    let fields: Vec<&str> = rest.split_whitespace().collect();
+                    for i in [11, 12] {
+                        ticks += fields.get(i).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+                    }
+                }
+            }
+            f(tid);
+        }
+        (n, ticks)
+    }
+
+    #[cfg(target_os = "linux")]
+    fn promote(tid: i32) {
+        let param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: changes the policy of a thread of this process; its nice value (+10, set
+        // before SCHED_IDLE) stays.
+        unsafe { libc::sched_setscheduler(tid, libc::SCHED_OTHER, &param) };
     }
 }
 
@@ -242,7 +372,7 @@ struct Worker {
 
 impl Worker {
     fn open(window: Window, lib: &ShaderLibrary, opts: WorkerOptions, send: &dyn Fn(RenderEvent)) -> Option<Worker> {
-        lower_priority();
+        lower_priority(opts.priority);
         let (gpu, shared_queue) = if opts.shared_device {
             (window.gpu.clone(), true)
         } else {

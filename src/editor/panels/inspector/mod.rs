@@ -8,19 +8,22 @@ pub use linking::{cell_of_pixel, pixel_of_cell};
 pub use pictures::{GridSnapshot, InspectorMode};
 
 use super::{Command, Panel, PanelCtx};
+use crate::editor::display::{FlatPicture, PictureCallback, PictureSlot};
 use crate::editor::jobs::render::INSPECT_LIMIT;
 use crate::render::Method;
 use eframe::egui;
+use eframe::egui_wgpu;
 use pictures::{export_png, grid_image, slice_image, surface_bins};
 use std::path::Path;
+use std::sync::Arc;
 
-/// The inspector's pictures (caches of the last snapshot) and where it drew them.
+/// The inspector's pictures (caches of the last snapshot) and where it drew them. They are drawn
+/// by the display's fast path ([`PictureCallback`]), not as egui images: on the software driver
+/// egui's shader made them about a quarter of every repaint.
 #[derive(Default)]
 pub struct InspectorPanel {
-    grid_tex: Option<egui::TextureHandle>,
-    slice_tex: Option<egui::TextureHandle>,
-    grid_img: Option<egui::ColorImage>,
-    slice_img: Option<egui::ColorImage>,
+    grid_img: Option<Arc<FlatPicture>>,
+    slice_img: Option<Arc<FlatPicture>>,
     /// (snapshot generation, mode) the grid picture shows; it does not depend on the slice, which
     /// changes with every pointer move while the slice follows it.
     grid_key: Option<(u64, InspectorMode)>,
@@ -32,19 +35,10 @@ pub struct InspectorPanel {
 
 impl InspectorPanel {
     /// Rebuilds a picture when what it shows changed.
-    fn refresh(&mut self, ctx: &egui::Context, s: &GridSnapshot, mode: InspectorMode, plane: u32) {
-        let opts = egui::TextureOptions::NEAREST;
-        let upload = |tex: &mut Option<egui::TextureHandle>, img: &Option<egui::ColorImage>, name: &str| match img {
-            Some(img) => match tex {
-                Some(t) => t.set(img.clone(), opts),
-                None => *tex = Some(ctx.load_texture(name, img.clone(), opts)),
-            },
-            None => *tex = None,
-        };
+    fn refresh(&mut self, s: &GridSnapshot, mode: InspectorMode, plane: u32) {
         if self.grid_key != Some((s.generation, mode)) {
             self.grid_key = Some((s.generation, mode));
-            self.grid_img = grid_image(s, mode);
-            upload(&mut self.grid_tex, &self.grid_img, "epivox-inspector-grid");
+            self.grid_img = grid_image(s, mode).map(FlatPicture::new);
         }
         let layer = match mode {
             InspectorMode::Layer(k) => Some(k),
@@ -53,15 +47,14 @@ impl InspectorPanel {
         if self.slice_key != Some((s.generation, plane, layer)) {
             self.slice_key = Some((s.generation, plane, layer));
             let depth = s.tracer.as_ref().map(|t| surface_bins(&s.setup, t, plane));
-            self.slice_img = Some(slice_image(s, plane, depth.as_deref(), layer));
-            upload(&mut self.slice_tex, &self.slice_img, "epivox-inspector-slice");
+            self.slice_img = Some(FlatPicture::new(slice_image(s, plane, depth.as_deref(), layer)));
         }
     }
 
     /// Exports the current pictures.
     pub fn export(&self, path: &Path) -> Result<(), String> {
         let g = self.grid_img.as_ref().ok_or("the inspector has no picture yet")?;
-        export_png(g, self.slice_img.as_ref(), path)
+        export_png(&g.image, self.slice_img.as_ref().map(|p| &p.image), path)
     }
 
     fn controls(&self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, bins: u32, out: &mut Vec<Command>) {
@@ -142,7 +135,7 @@ impl Panel for InspectorPanel {
         if cx.jobs.render.shown.as_ref().is_some_and(|p| p.generation != s.generation) {
             ui.label(egui::RichText::new("(the grid of the last full-quality frame)").small().weak());
         }
-        self.refresh(ui.ctx(), &s, iv.mode, plane);
+        self.refresh(&s, iv.mode, plane);
         let hovered = self.pictures(ui, &s, plane, cx.view.layout.hover_cell, cx.view.layout.inspector_cell);
         ui.label(
             egui::RichText::new(format!(
@@ -175,8 +168,9 @@ impl InspectorPanel {
         // ui's own rectangle, and the pictures would then change size from frame to frame).
         let clip = ui.clip_rect();
         let avail = egui::vec2(clip.right() - ui.cursor().left(), clip.bottom() - ui.cursor().top());
-        let size =
-            |img: &Option<egui::ColorImage>| img.as_ref().map(|i| egui::vec2(i.size[0] as f32, i.size[1] as f32));
+        let size = |img: &Option<Arc<FlatPicture>>| {
+            img.as_ref().map(|p| egui::vec2(p.image.size[0] as f32, p.image.size[1] as f32))
+        };
         let gs = size(&self.grid_img).unwrap_or(egui::vec2(1.0, 1.0));
         let ss = size(&self.slice_img).unwrap_or(egui::vec2(1.0, 1.0));
         let room = egui::vec2(avail.x - 12.0, avail.y - 30.0).max(egui::vec2(64.0, 64.0));
@@ -202,8 +196,8 @@ impl InspectorPanel {
         let mut hovered = None;
         let stroke = egui::Stroke::new(1.0, egui::Color32::from_rgb(80, 255, 120));
         ui.with_layout(layout, |ui| {
-            if let Some(t) = &self.grid_tex {
-                let r = ui.add(egui::Image::new((t.id(), gsize)).sense(egui::Sense::hover()));
+            if let Some(p) = &self.grid_img {
+                let r = picture(ui, PictureSlot::InspectorGrid, p, gsize);
                 let rect = r.rect;
                 self.grid_rect = Some(rect);
                 if let Some(pos) = r.hover_pos() {
@@ -223,8 +217,8 @@ impl InspectorPanel {
                     None => String::new(),
                 });
             }
-            if let Some(t) = &self.slice_tex {
-                let r = ui.add(egui::Image::new((t.id(), ssize)).sense(egui::Sense::hover()));
+            if let Some(p) = &self.slice_img {
+                let r = picture(ui, PictureSlot::InspectorSlice, p, ssize);
                 let rect = r.rect;
                 if let Some(pos) = r.hover_pos() {
                     let y = ((pos.y - rect.top()) / rect.height() * g.rays as f32) as f64;
@@ -240,4 +234,13 @@ impl InspectorPanel {
         });
         hovered
     }
+}
+
+/// Allocates `size` and draws `p` over it (the display's fast path); hover is sensed as on an image.
+fn picture(ui: &mut egui::Ui, slot: PictureSlot, p: &Arc<FlatPicture>, size: egui::Vec2) -> egui::Response {
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
+    if ui.is_rect_visible(rect) {
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, PictureCallback { slot, picture: p.clone() }));
+    }
+    response
 }

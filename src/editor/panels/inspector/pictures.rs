@@ -115,6 +115,8 @@ const SHADOW: egui::Color32 = egui::Color32::from_gray(95);
 const LIT: egui::Color32 = egui::Color32::from_gray(18);
 const BEYOND: egui::Color32 = egui::Color32::from_rgb(40, 6, 6);
 const EMPTY: egui::Color32 = egui::Color32::from_gray(12);
+#[cfg(test)]
+const WHITE: egui::Color32 = egui::Color32::WHITE;
 
 /// A perceptual ramp (dark blue -> magenta -> orange -> pale yellow) for counts.
 fn ramp(t: f32) -> egui::Color32 {
@@ -185,26 +187,48 @@ pub fn grid_image(s: &GridSnapshot, mode: InspectorMode) -> Option<egui::ColorIm
 
 /// The slice of one plane: rays down, bins across, in the voxel colour code; each ray's surface
 /// depth a white texel. With `layer`, that bin's column is marked (the layer shown beside it).
+///
+/// The slice follows the pointer, so it is rebuilt on the UI thread as the pointer moves: the
+/// words of a ray are looked up once per row, not per voxel (the same colours as
+/// [`GridSnapshot::voxel`], tested).
 pub fn slice_image(s: &GridSnapshot, plane: u32, surface_bins: Option<&[f32]>, layer: Option<u32>) -> egui::ColorImage {
     let g = s.grid;
     let plane = plane.min(g.planes - 1);
     let step = g.rays.div_ceil(MAX_SIDE).max(1);
     let h = g.rays.div_ceil(step);
-    let mut img = egui::ColorImage::filled([g.bins as usize, h as usize], egui::Color32::BLACK);
+    let bins = g.bins as usize;
+    let mut img = egui::ColorImage::filled([bins, h as usize], egui::Color32::BLACK);
     let angles = s.angles();
-    for y in 0..h {
-        let ray = y * step;
-        for k in 0..g.bins {
-            let mut c = s.voxel(plane, ray, k, &angles);
-            if layer == Some(k) {
+    let bit = |w: &[u32], k: usize| w.get(k / 32).is_some_and(|w| (w >> (k % 32)) & 1 == 1);
+    for (y, row) in img.pixels.chunks_exact_mut(bins).enumerate() {
+        let ray = y as u32 * step;
+        let geometry = s.geometry.as_deref().map(|b| s.ray_words(b, plane, ray)).unwrap_or(&[]);
+        let shadow = s.ray_words(&s.shadow, plane, ray);
+        // Past the view ray's end where gamma + z >= pi (point light).
+        let beyond = |k: usize| {
+            angles.as_ref().is_some_and(|(g, z)| {
+                g.get(ray as usize).zip(z.get(k)).is_some_and(|(g, z)| g + z >= std::f64::consts::PI)
+            })
+        };
+        for (k, px) in row.iter_mut().enumerate() {
+            let mut c = if bit(geometry, k) {
+                GEOMETRY
+            } else if bit(shadow, k) {
+                SHADOW
+            } else if beyond(k) {
+                BEYOND
+            } else {
+                LIT
+            };
+            if layer == Some(k as u32) {
                 // A light blue tint over whatever the voxel is.
                 c = egui::Color32::from_rgb(c.r() / 2 + 40, c.g() / 2 + 90, c.b() / 2 + 127);
             }
-            img[(k as usize, y as usize)] = c;
+            *px = c;
         }
         if let Some(b) = surface_bins.and_then(|d| d.get(ray as usize)) {
-            if b.is_finite() && *b >= 0.0 && (*b as u32) < g.bins {
-                img[(*b as usize, y as usize)] = egui::Color32::WHITE;
+            if b.is_finite() && *b >= 0.0 && (*b as usize) < bins {
+                row[*b as usize] = egui::Color32::WHITE;
             }
         }
     }
@@ -301,5 +325,31 @@ mod tests {
         assert_eq!(slice[(10, 5)], SHADOW);
         assert_ne!(slice[(33, 5)], GEOMETRY, "the layer's column is tinted");
         assert_eq!(slice_image(&s, 3, None, None)[(33, 5)], GEOMETRY);
+    }
+
+    #[test]
+    fn the_slice_shows_the_voxels_colours() {
+        let mut s = snapshot();
+        // Every word different (a fixed pseudo-random pattern), in both grids.
+        let mut x = 0x9e37_79b9u32;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        s.shadow.iter_mut().for_each(|w| *w = next());
+        s.geometry.iter_mut().flatten().for_each(|w| *w = next() & next());
+        let surface: Vec<f32> = (0..8).map(|r| if r % 3 == 0 { f32::INFINITY } else { r as f32 * 7.0 }).collect();
+        let angles = s.angles();
+        for plane in 0..8 {
+            let img = slice_image(&s, plane, Some(&surface), None);
+            for ray in 0..8u32 {
+                for k in 0..64u32 {
+                    let want = if surface[ray as usize] == k as f32 { WHITE } else { s.voxel(plane, ray, k, &angles) };
+                    assert_eq!(img[(k as usize, ray as usize)], want, "plane {plane} ray {ray} bin {k}");
+                }
+            }
+        }
     }
 }
