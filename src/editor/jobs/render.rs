@@ -84,7 +84,7 @@ pub struct WorkerOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum RenderPriority {
     /// Linux `SCHED_IDLE`: the render runs on CPU time nothing else wants, so a UI frame never
-    /// waits behind it (a 3 s viewport drag on llvmpipe, 2 cores: UI frame p95 37–38 ms against
+    /// waits behind it (a 3 s viewport drag on llvmpipe, 2 cores: UI frame p95 35–40 ms against
     /// 39–53 ms at nice 19 and 39–59 ms at nice 10, with as many previews; docs/editor.md). The
     /// price: while other programs keep every core busy, renders wait for them.
     #[default]
@@ -261,8 +261,9 @@ mod starvation {
                 if starved >= STARVED_TICKS {
                     let (n, _) = idle_threads(promote);
                     log::warn!(
-                        "the render worker got no CPU for 2 s (other programs keep every core busy): \
-                         its {n} threads now run at nice +10 instead of idle priority"
+                        "the render worker got almost no CPU for 2 s while a frame waited (other programs \
+                         keep the cores busy, or a long GPU wait): its {n} threads now run at nice +10 \
+                         instead of idle priority"
                     );
                     return;
                 }
