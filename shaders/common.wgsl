@@ -15,12 +15,13 @@ const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;
 const INV_4PI: f32 = 0.0795774715459477;
 
-// Specialisation (DESIGN section 6): the light type and the phase function are pipeline-overridable
-// constants, set per pipeline by `src/render/variant.rs` (one pipeline per variant in use), so the
-// branches on them fold away when the pipeline is built instead of running per pixel. The values
-// here are only defaults for validation; every pipeline sets both.
+// Specialisation (DESIGN section 6): the light type, the phase function and a grey medium are
+// pipeline-overridable constants, set per pipeline by `src/render/variant.rs` (one pipeline per
+// variant in use), so the branches on them fold away when the pipeline is built instead of running
+// per pixel. The values here are only defaults for validation; every pipeline sets them all.
 override POINT_LIGHT: bool = true; // point light (else directional)
 override PHASE: u32 = 0u;          // Phase::id(): 0 isotropic, 1 HG, 2 Schlick, 3 Cornette-Shanks, 4 Rayleigh
+override GREY_MEDIUM: bool = false; // sigma_t equal in R, G and B: one channel's exponentials
 
 // flags
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
@@ -251,6 +252,13 @@ fn one_minus_exp_over_x(x: vec3f) -> vec3f {
     let series = 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))));
     let direct = (1.0 - exp(-x)) / max(x, vec3f(1e-30));
     return select(direct, series, abs(x) < vec3f(0.5));
+}
+
+// The same for one channel (a grey medium).
+fn one_minus_exp_over_x1(x: f32) -> f32 {
+    let series = 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))));
+    let direct = (1.0 - exp(-x)) / max(x, 1e-30);
+    return select(direct, series, abs(x) < 0.5);
 }
 
 // A direction with no zero component, so slab tests never compute 0 * inf.

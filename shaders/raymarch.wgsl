@@ -130,7 +130,12 @@ fn march_directional(v: vec3f, t_s: f32, u: f32) -> vec3f {
         let t = span.x + (f32(i) + u) * dt;
         let p = f.eye.xyz + t * v;
         let l = exit_distance(p, w, lo, hi);
-        sum += lit(p) * exp(-f.sigma_t.xyz * (l + t - span.x));
+        // A grey medium: one exponential for the three channels (GREY_MEDIUM, a pipeline constant).
+        if (GREY_MEDIUM) {
+            sum += lit(p) * exp(-f.sigma_t.x * (l + t - span.x));
+        } else {
+            sum += lit(p) * exp(-f.sigma_t.xyz * (l + t - span.x));
+        }
     }
     let ph = phase(f.sigma_s.w, dot(w, v));
     return f.sigma_s.xyz * f.light_power.xyz * ph * sum * dt;

@@ -36,7 +36,7 @@ impl Integrate {
         let module = lib.module(device, "integrate.wgsl")?;
         let layout = IntegrateBindings::layout(device, "Integrate::layout", wgpu::ShaderStages::COMPUTE);
         let pipelines =
-            SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightAndPhase);
+            SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightPhaseAndMedium);
         Ok(Integrate { pipelines, layout, bind_group: None })
     }
 

@@ -524,7 +524,8 @@ impl Renderer {
             }));
         }
         let setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
-        let variant = Variant::new(setup.frame.is_point(), &scene.medium.phase);
+        let variant =
+            Variant::new(setup.frame.is_point(), &scene.medium.phase, setup.uniforms.sigma_t.truncate().to_array());
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
         if self.variant != Some(variant) {
@@ -552,7 +553,7 @@ impl Renderer {
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
         let setup = self.prepare(scene, width, height, method)?;
-        let v = Variant::new(setup.frame.is_point(), &scene.medium.phase);
+        let v = Variant::new(setup.frame.is_point(), &scene.medium.phase, setup.uniforms.sigma_t.truncate().to_array());
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
         };

@@ -65,7 +65,7 @@ impl Raymarch {
             mapped_at_creation: false,
         });
         let pipelines =
-            SpecialisedCompute::new(device, "Raymarch", module, &layout, ["main"], Specialised::LightAndPhase);
+            SpecialisedCompute::new(device, "Raymarch", module, &layout, ["main"], Specialised::LightPhaseAndMedium);
         Ok(Raymarch { pipelines, layout, bind_group: None, uniforms })
     }
 

@@ -1,8 +1,10 @@
-//! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type or
-//! the phase function builds one pipeline per combination a frame actually uses, with the WGSL
-//! pipeline-overridable constants `POINT_LIGHT` and `PHASE` (`shaders/common.wgsl`) set. The shader
-//! compiler then folds the branches on them away when it builds the pipeline, instead of every pixel
-//! taking them at run time.
+//! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type, the
+//! phase function or whether the medium is grey builds one pipeline per combination a frame actually
+//! uses, with the WGSL pipeline-overridable constants `POINT_LIGHT`, `PHASE` and `GREY_MEDIUM`
+//! (`shaders/common.wgsl`) set. The shader compiler then folds the branches on them away when it
+//! builds the pipeline, instead of every pixel taking them at run time. (On llvmpipe a branch on a
+//! value read from a buffer runs both sides for every pixel: a grey-medium test made at run time
+//! saved nothing, the same test as a constant a third of Integrate on the classroom.)
 //!
 //! Pipelines are built on first use ([`VariantPipelines::prepare`], called by
 //! `Renderer::render_frame` before it records) and kept, so switching the phase function in the
@@ -18,17 +20,26 @@ pub struct Variant {
     pub point_light: bool,
     /// [`Phase::id`].
     pub phase: u32,
+    /// The medium's extinction is the same in R, G and B: transmittances take one channel's
+    /// exponential.
+    pub grey: bool,
 }
 
 impl Variant {
-    pub fn new(point_light: bool, phase: &Phase) -> Variant {
-        Variant { point_light, phase: phase.id() }
+    /// `sigma_t`: the medium's extinction per channel, as the shaders get it.
+    pub fn new(point_light: bool, phase: &Phase, sigma_t: [f32; 3]) -> Variant {
+        let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
+        Variant { point_light, phase: phase.id(), grey }
     }
 
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
-    /// `common.wgsl`, which declares both, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 2] {
-        [("POINT_LIGHT", if self.point_light { 1.0 } else { 0.0 }), ("PHASE", self.phase as f64)]
+    /// `common.wgsl`, which declares them all, so the names always exist.
+    pub fn constants(&self) -> [(&'static str, f64); 3] {
+        [
+            ("POINT_LIGHT", if self.point_light { 1.0 } else { 0.0 }),
+            ("PHASE", self.phase as f64),
+            ("GREY_MEDIUM", if self.grey { 1.0 } else { 0.0 }),
+        ]
     }
 
     /// The phase function's file name (`henyey-greenstein`).
@@ -41,7 +52,8 @@ impl fmt::Display for Variant {
     /// `point light, henyey-greenstein`
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let light = if self.point_light { "point light" } else { "directional light" };
-        write!(f, "{light}, {}", self.phase_name())
+        let grey = if self.grey { ", grey medium" } else { "" };
+        write!(f, "{light}, {}{grey}", self.phase_name())
     }
 }
 
@@ -51,6 +63,9 @@ impl fmt::Display for Variant {
 pub enum Specialised {
     Light,
     LightAndPhase,
+    /// The light, the phase and whether the medium is grey (the passes that evaluate
+    /// transmittance per sample: Integrate and the ray march).
+    LightPhaseAndMedium,
 }
 
 /// A pass's pipelines (or groups of pipelines, `P`), one per variant in use.
@@ -67,8 +82,9 @@ impl<P> VariantPipelines<P> {
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
         match self.reads {
-            Specialised::Light => Variant { phase: 0, ..v },
-            Specialised::LightAndPhase => v,
+            Specialised::Light => Variant { phase: 0, grey: false, ..v },
+            Specialised::LightAndPhase => Variant { grey: false, ..v },
+            Specialised::LightPhaseAndMedium => v,
         }
     }
 
@@ -80,7 +96,7 @@ impl<P> VariantPipelines<P> {
             let label = match self.reads {
                 Specialised::Light if key.point_light => "[point light]".to_string(),
                 Specialised::Light => "[directional light]".to_string(),
-                Specialised::LightAndPhase => format!("[{key}]"),
+                Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
             };
             let p = build(&key.constants(), &label);
             self.built.push((key, p));
@@ -180,9 +196,10 @@ mod tests {
                 naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
                     .validate(&module)
                     .unwrap_or_else(|e| panic!("{file}: {e}"));
-            for point_light in [true, false] {
+            for (point_light, sigma_t) in [(true, [0.1, 0.1, 0.1]), (false, [0.1, 0.1, 0.1]), (false, [0.1, 0.2, 0.3])]
+            {
                 for phase in &phases {
-                    let v = Variant::new(point_light, phase);
+                    let v = Variant::new(point_light, phase, sigma_t);
                     let constants: naga::back::PipelineConstants =
                         v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
                     for ep in &module.entry_points {
@@ -215,6 +232,7 @@ mod tests {
         }
         let common = crate::gpu::EMBEDDED.iter().find(|(f, _)| *f == "common.wgsl").map(|(_, s)| *s).unwrap_or("");
         assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
+        assert!(common.contains("override GREY_MEDIUM"));
     }
 
     #[test]
@@ -222,10 +240,10 @@ mod tests {
         let mut p = VariantPipelines::new(Specialised::Light);
         let mut builds = 0;
         for phase in [Phase::Isotropic, Phase::Rayleigh, Phase::HenyeyGreenstein { g: 0.3 }] {
-            p.prepare(Variant::new(true, &phase), |_, _| builds += 1);
+            p.prepare(Variant::new(true, &phase, GREY), |_, _| builds += 1);
         }
         assert_eq!(builds, 1);
-        p.prepare(Variant::new(false, &Phase::Rayleigh), |c, label| {
+        p.prepare(Variant::new(false, &Phase::Rayleigh, COLOURED), |c, label| {
             assert_eq!(c[0], ("POINT_LIGHT", 0.0));
             assert_eq!(label, "[directional light]");
         });
@@ -233,9 +251,21 @@ mod tests {
 
         let mut q = VariantPipelines::new(Specialised::LightAndPhase);
         for phase in [Phase::Isotropic, Phase::Rayleigh, Phase::Rayleigh] {
-            q.prepare(Variant::new(true, &phase), |c, _| assert_eq!(c[1].1, phase.id() as f64));
+            q.prepare(Variant::new(true, &phase, GREY), |c, _| assert_eq!(c[1].1, phase.id() as f64));
+            q.prepare(Variant::new(true, &phase, COLOURED), |_, _| {});
         }
-        assert_eq!(q.variants().count(), 2);
-        assert!(q.get(Variant::new(true, &Phase::Schlick { g: 0.1 })).is_none());
+        assert_eq!(q.variants().count(), 2, "passes that do not read the medium share a grey and a coloured one");
+        assert!(q.get(Variant::new(true, &Phase::Schlick { g: 0.1 }, GREY)).is_none());
+
+        let mut m = VariantPipelines::new(Specialised::LightPhaseAndMedium);
+        m.prepare(Variant::new(false, &Phase::Rayleigh, GREY), |c, label| {
+            assert_eq!(c[2], ("GREY_MEDIUM", 1.0));
+            assert!(label.contains("grey medium"), "{label}");
+        });
+        m.prepare(Variant::new(false, &Phase::Rayleigh, COLOURED), |c, _| assert_eq!(c[2], ("GREY_MEDIUM", 0.0)));
+        assert_eq!(m.variants().count(), 2);
     }
+
+    const GREY: [f32; 3] = [0.09, 0.09, 0.09];
+    const COLOURED: [f32; 3] = [0.09, 0.09, 0.1];
 }
