@@ -12,6 +12,7 @@
 
 use crate::gpu::{GpuContext, GpuError, ShaderLibrary};
 use crate::image::Image;
+use crate::render::util::{texture_2d, texture_entry, uniform_entry};
 use eframe::egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -36,30 +37,10 @@ struct DisplayUniforms {
 /// The display shader's bind group layout. Written here, not reflected, so a reloaded
 /// `display.wgsl` must match it (a mismatch is a reload error, and the old pipeline stays).
 pub fn display_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let fragment = wgpu::ShaderStages::FRAGMENT;
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("editor::Display::layout"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-        ],
+        entries: &[uniform_entry(0, fragment), texture_entry(1, fragment, wgpu::TextureViewDimension::D2)],
     })
 }
 
@@ -155,6 +136,14 @@ impl DisplayPipeline {
             Ok(DisplayPipeline { id: next_id(), tonemap, show, show_layout })
         })?
     }
+
+    /// Draws a tone-mapped texture (its bind group from `show_bind_group`) over the callback's
+    /// rectangle, inside egui's pass.
+    fn draw(&self, pass: &mut wgpu::RenderPass<'static>, bind_group: &wgpu::BindGroup) {
+        pass.set_pipeline(&self.show);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
 }
 
 /// One picture's images on the window's device, with the bind groups that tone-map them.
@@ -185,16 +174,8 @@ impl DisplayImages {
         });
         let bind = |img: &Image, label: &'static str| {
             let size = wgpu::Extent3d { width: img.width, height: img.height, depth_or_array_layers: 1 };
-            let texture = d.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+            let texture = texture_2d(d, label, img.width, img.height, 1, wgpu::TextureFormat::Rgba32Float, usage);
             let rgba: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
             ui.queue.write_texture(
                 texture.as_image_copy(),
@@ -242,16 +223,9 @@ struct ShownImage {
 
 impl ShownImage {
     fn new(device: &wgpu::Device, display: &DisplayPipeline, key: ShownKey, size: (u32, u32)) -> ShownImage {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("editor::Display::shown"),
-            size: wgpu::Extent3d { width: size.0.max(1), height: size.1.max(1), depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHOWN_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let texture =
+            texture_2d(device, "editor::Display::shown", size.0.max(1), size.1.max(1), 1, SHOWN_FORMAT, usage);
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
             label: Some("editor::Display::shown_view"),
             ..Default::default()
@@ -352,10 +326,9 @@ impl CallbackTrait for ViewportCallback {
         resources: &CallbackResources,
     ) {
         let Some(res) = resources.get::<ViewportResources>() else { return };
-        let Some(shown) = &res.shown else { return };
-        pass.set_pipeline(&res.display.show);
-        pass.set_bind_group(0, &shown.bind_group, &[]);
-        pass.draw(0..3, 0..1);
+        if let Some(shown) = &res.shown {
+            res.display.draw(pass, &shown.bind_group);
+        }
     }
 }
 
@@ -413,20 +386,9 @@ impl CallbackTrait for PictureCallback {
         let slot = match res.pictures.remove(&self.slot) {
             Some(t) if t.size == img.size && t.holds.1 == holds.1 => t,
             _ => {
-                let texture = device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("editor::Display::picture"),
-                    size: wgpu::Extent3d {
-                        width: img.size[0] as u32,
-                        height: img.size[1] as u32,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: SHOWN_FORMAT,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                    view_formats: &[],
-                });
+                let (w, h) = (img.size[0] as u32, img.size[1] as u32);
+                let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+                let texture = texture_2d(device, "editor::Display::picture", w, h, 1, SHOWN_FORMAT, usage);
                 let bind_group = show_bind_group(device, &res.display, &texture, wgpu::FilterMode::Nearest);
                 SlotTexture { holds, size: img.size, texture, bind_group }
             }
@@ -452,10 +414,9 @@ impl CallbackTrait for PictureCallback {
         resources: &CallbackResources,
     ) {
         let Some(res) = resources.get::<ViewportResources>() else { return };
-        let Some(slot) = res.pictures.get(&self.slot) else { return };
-        pass.set_pipeline(&res.display.show);
-        pass.set_bind_group(0, &slot.bind_group, &[]);
-        pass.draw(0..3, 0..1);
+        if let Some(slot) = res.pictures.get(&self.slot) {
+            res.display.draw(pass, &slot.bind_group);
+        }
     }
 }
 
