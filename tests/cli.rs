@@ -91,6 +91,42 @@ fn renders_the_builtin_scene_with_json_and_exr() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("rel RMSE"));
 }
 
+/// `--depth-exr` writes where the view rays end; `--view-ends` gives them to the reference, which
+/// reports how many differ from its own first hits; wrong sizes, wrong methods and values that
+/// are not distances are named.
+#[test]
+fn view_ends_round_trip_and_bad_ones_are_named() {
+    if !has_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_owned();
+    let o = epivox(&["render", "--out", &p("v.png"), "--size", "40x30", "--depth-exr", &p("d.exr")], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d = epivox::Image::read_exr(p("d.exr")).unwrap();
+    assert_eq!((d.width, d.height), (40, 30));
+    assert!(d.pixels.iter().all(|v| v[0] > 0.0), "every pixel has an end (inf: sky)");
+    assert!(d.pixels.iter().any(|v| v[0].is_infinite()) && d.pixels.iter().any(|v| v[0].is_finite()));
+    let args = ["render", "--method", "reference", "--size", "40x30", "--json", "--out"];
+    let o = epivox(&[&args[..], &[&p("r.png"), "--view-ends", &p("d.exr")]].concat(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["view_ends_differing"].as_u64().unwrap() <= 2, "{j}");
+
+    let e = fails(&["render", "--out", &p("x.png"), "--size", "40x30", "--view-ends", &p("d.exr")], &[]);
+    assert!(e.contains("--view-ends") && e.contains("--method reference"), "{e}");
+    let e = fails(&[&args[..4], &["20x30", "--out", &p("x.png"), "--view-ends", &p("d.exr")]].concat(), &[]);
+    assert!(e.contains("d.exr") && e.contains("40x30") && e.contains("20x30"), "{e}");
+    let mut bad = d.clone();
+    bad.pixels[45] = [-1.0; 3];
+    bad.write_exr(p("bad.exr")).unwrap();
+    let e = fails(&[&args[..], &[&p("x.png"), "--view-ends", &p("bad.exr")]].concat(), &[]);
+    assert!(e.contains("bad.exr") && e.contains("(5, 1)") && e.contains("-1"), "{e}");
+    let e = fails(&[&args[..], &[&p("d.exr"), "--view-ends", &p("d.exr")]].concat(), &[]);
+    assert!(e.contains("input"), "{e}");
+    assert!(!dir.path().join("x.png").exists());
+}
+
 #[test]
 fn missing_and_malformed_scene_files_are_named() {
     let dir = tempfile::tempdir().unwrap();

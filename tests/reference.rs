@@ -661,6 +661,46 @@ fn render_and_render_pixels_agree() {
     }
 }
 
+/// `render_ending` with given view ends: its own first hits reproduce `render` to the bit; a pixel
+/// given another end changes alone, to the scattered light exactly along that segment, and is
+/// counted as differing.
+#[test]
+fn render_ending_follows_the_given_view_ends() {
+    let cam = Camera { eye: Vec3::new(1.0, 2.0, 6.0), target: Vec3::new(0.0, 1.0, 0.0), ..Camera::default() };
+    let light = Light::Point { position: Vec3::new(0.5, 3.0, 0.5), intensity: Vec3::splat(30.0), radius: 0.0 };
+    let s = room(light, Medium::default(), cam);
+    let o = ReferenceOptions { samples: 64, ..opts() };
+    let (w, h) = (12, 9);
+    let own = reference::render(&s, w, h, &o);
+    assert_eq!(own.segments_differing, 0);
+    let same = reference::render_ending(&s, w, h, &o, reference::ViewEnds::Given(&own.depth));
+    // The ends are the first hits rounded to f32 (a few 1e-8 of the distance): the same to 1e-6.
+    let close = |a: &epivox::Image, b: &epivox::Image| {
+        a.pixels.iter().flatten().zip(b.pixels.iter().flatten()).all(|(x, y)| (x - y).abs() <= 1e-6 * y.abs())
+    };
+    assert!(close(&same.scatter, &own.scatter) && close(&same.hdr, &own.hdr));
+    assert_eq!(same.segments_differing, 0);
+
+    let (a, b) = ((4 * w + 5) as usize, (8 * w + 11) as usize);
+    assert!(own.depth[a].is_finite() && own.depth[b].is_finite());
+    let mut ends = own.depth.clone();
+    ends[a] *= 0.5;
+    ends[b] *= 0.25;
+    let moved = reference::render_ending(&s, w, h, &o, reference::ViewEnds::Given(&ends));
+    assert_eq!(moved.segments_differing, 2);
+    assert_eq!(moved.depth, own.depth, "depth stays the reference's own first hits");
+    let tracer = Tracer::new(&s);
+    for (i, (x, y)) in [(a, (5u32, 4u32)), (b, (11, 8))] {
+        let d = s.camera.pixel_dir_f64(x as f64, y as f64, w, h);
+        let want = reference::scatter_along_ray(&s, &tracer, &o, s.camera.eye.as_dvec3(), d, ends[i] as f64);
+        assert_eq!(moved.scatter.pixels[i], want.map(|v| v as f32), "pixel ({x},{y})");
+        assert_ne!(moved.scatter.pixels[i], own.scatter.pixels[i], "pixel ({x},{y}) did not move");
+    }
+    for i in (0..(w * h) as usize).filter(|i| *i != a && *i != b) {
+        assert_eq!(moved.scatter.pixels[i], same.scatter.pixels[i], "pixel {i}");
+    }
+}
+
 /// Stanford bunny (69,451 triangles) on a floor, back-lit by a point light on screen (its shadow
 /// volume runs toward the camera), 128x128, 512 samples.
 /// Ignored by default (it is a benchmark): `cargo test --test reference -- --ignored --nocapture`.

@@ -114,6 +114,16 @@ pub struct RenderArgs {
     /// Also write the final linear image as float RGB OpenEXR (.exr).
     #[arg(long)]
     pub hdr_exr: Option<PathBuf>,
+    /// Also write where each view ray ends (distance from the eye; inf for the sky) as OpenEXR
+    /// (.exr): the rasterizer's surfaces for the GPU methods, the first hits for the reference.
+    #[arg(long)]
+    pub depth_exr: Option<PathBuf>,
+    /// Reference: end each view ray's scattered light at the distances in this OpenEXR (one that
+    /// --depth-exr of a GPU render wrote, same size) instead of at its own first hit: the exact
+    /// scattered light along the same view segments, to tell a method's volumetric error from
+    /// primary visibility (a rasterizer decides coverage on its sub-pixel grid).
+    #[arg(long, value_name = "EXR")]
+    pub view_ends: Option<PathBuf>,
     /// Print GPU time per pass (encoder timestamps).
     #[arg(long)]
     pub timings: bool,
@@ -383,21 +393,41 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let mut wanted = vec![Output::new("--out", &args.out, What::Final)];
     wanted.extend(args.scatter_exr.as_ref().map(|p| Output::new("--scatter-exr", p, What::Scatter)));
     wanted.extend(args.hdr_exr.as_ref().map(|p| Output::new("--hdr-exr", p, What::Hdr)));
+    wanted.extend(args.depth_exr.as_ref().map(|p| Output::new("--depth-exr", p, What::Depth)));
+    let mut inputs = inputs;
+    inputs.extend(args.view_ends.clone());
     let outputs = outputs::plan(wanted, &inputs)?;
     let (w, h) = args.size;
+    let view_ends = match &args.view_ends {
+        Some(_) if args.method != Method::Reference => {
+            bail!("--view-ends: only the reference (--method reference) takes its view rays' ends from a file")
+        }
+        Some(p) => Some(read_view_ends(p, w, h)?),
+        None => None,
+    };
     let exposure = exposure.unwrap_or(0.0);
     let steps = args.steps.unwrap_or(Baseline::default().steps);
     let pixels = w as u64 * h as u64;
     let started = Instant::now();
 
     let mut pruned_z = None;
+    let mut segments_differing = None;
+    let depth: Vec<f32>;
     let (hdr, scatter, out, adapter): (Image, Image, Option<RenderOutput>, String) = match args.method {
         Method::Reference => {
             let mut opts = reference::ReferenceOptions { progress: !args.json, ..Default::default() };
             if let Some(n) = args.samples {
                 opts.samples = n;
             }
-            let r = reference::render(&scene, w, h, &opts);
+            let ends = match &view_ends {
+                Some(e) => reference::ViewEnds::Given(e),
+                None => reference::ViewEnds::OwnHits,
+            };
+            let r = reference::render_ending(&scene, w, h, &opts, ends);
+            if view_ends.is_some() {
+                segments_differing = Some(r.segments_differing);
+            }
+            depth = r.depth;
             (r.hdr, r.scatter, None, "cpu reference (f64)".to_string())
         }
         Method::Vsv | Method::Cartesian | Method::Raymarch => {
@@ -414,6 +444,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.prune = !args.no_prune;
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
+            depth = if args.depth_exr.is_some() { renderer.read_view_distances()? } else { vec![0.0; pixels as usize] };
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())
         }
     };
@@ -421,7 +452,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     if hdr.count_non_finite() > 0 || scatter.count_non_finite() > 0 {
         log::warn!("the image has {} non-finite values", hdr.count_non_finite() + scatter.count_non_finite());
     }
-    outputs::write_all(&outputs, &hdr, &scatter, exposure)?;
+    let depth = Image::from_pixels(w, h, depth.iter().map(|&d| [d; 3]).collect())?;
+    outputs::write_all(&outputs, &outputs::Rendered { hdr: &hdr, scatter: &scatter, depth: &depth }, exposure)?;
 
     let timings = out.as_ref().map(|o| o.timings.clone()).unwrap_or_default();
     let total_ms: f64 = timings.iter().map(|t| t.ms).sum();
@@ -448,6 +480,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
         if let Some(p) = &pruned_z {
             j["pruning"] = serde_json::to_value(p)?;
+        }
+        if let Some(n) = segments_differing {
+            j["view_ends_differing"] = serde_json::json!(n);
         }
         if args.method == Method::Raymarch {
             j["steps"] = serde_json::json!(steps);
@@ -514,6 +549,31 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--view-ends`: one distance per pixel from the red channel of a `w x h` OpenEXR, each finite and
+/// at least 0 or `+inf` (the sky).
+fn read_view_ends(path: &Path, w: u32, h: u32) -> Result<Vec<f32>> {
+    let img = Image::read_exr(path).with_context(|| format!("--view-ends {}", path.display()))?;
+    if (img.width, img.height) != (w, h) {
+        bail!(
+            "--view-ends {}: the file is {}x{}, the render {w}x{h}; write it with --depth-exr at the same --size",
+            path.display(),
+            img.width,
+            img.height
+        );
+    }
+    let ends: Vec<f32> = img.pixels.iter().map(|p| p[0]).collect();
+    if let Some(i) = ends.iter().position(|d| d.is_nan() || *d < 0.0) {
+        bail!(
+            "--view-ends {}: pixel ({}, {}) holds {}, not a distance (0 or more, inf for the sky)",
+            path.display(),
+            i % w as usize,
+            i / w as usize,
+            ends[i]
+        );
+    }
+    Ok(ends)
 }
 
 /// `--gain`: 1 to 1000.

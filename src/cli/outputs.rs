@@ -15,6 +15,16 @@ pub enum What {
     Hdr,
     /// The in-scattered radiance alone (EXR only).
     Scatter,
+    /// The distance along each unit view ray to the surface the method ended it at, in R, G and B
+    /// (`inf` for the sky; EXR only).
+    Depth,
+}
+
+/// The images a render produced, for [`write_all`].
+pub struct Rendered<'a> {
+    pub hdr: &'a Image,
+    pub scatter: &'a Image,
+    pub depth: &'a Image,
 }
 
 /// An image file format, from the path's extension.
@@ -141,10 +151,14 @@ pub fn plan(mut outputs: Vec<Output>, inputs: &[PathBuf]) -> Result<Vec<Output>>
 
 /// Writes every output beside its destination, then renames them all: when one fails, none of the
 /// destinations has changed.
-pub fn write_all(outputs: &[Output], hdr: &Image, scatter: &Image, exposure: f32) -> Result<()> {
+pub fn write_all(outputs: &[Output], images: &Rendered, exposure: f32) -> Result<()> {
     let mut staged: Vec<Staged> = Vec::with_capacity(outputs.len());
     for o in outputs {
-        let image = if o.what == What::Scatter { scatter } else { hdr };
+        let image = match o.what {
+            What::Scatter => images.scatter,
+            What::Depth => images.depth,
+            What::Final | What::Hdr => images.hdr,
+        };
         let s = match o.format {
             Format::Png => image.stage_png(&o.path, exposure),
             Format::Exr => image.stage_exr(&o.path),
@@ -179,13 +193,14 @@ mod tests {
             .unwrap();
         std::fs::remove_dir(&sub).unwrap();
         let img = Image::new(2, 2);
-        let err = write_all(&plan, &img, &img, 0.0).unwrap_err();
+        let images = Rendered { hdr: &img, scatter: &img, depth: &img };
+        let err = write_all(&plan, &images, 0.0).unwrap_err();
         assert!(format!("{err:#}").contains("b.exr"), "{err:#}");
         assert_eq!(std::fs::read(&first).unwrap(), b"old");
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1, "a temporary file was left");
         // With the folder back, both are written.
         std::fs::create_dir(&sub).unwrap();
-        write_all(&plan, &img, &img, 0.0).unwrap();
+        write_all(&plan, &images, 0.0).unwrap();
         assert_ne!(std::fs::read(&first).unwrap(), b"old");
         assert!(Image::read_exr(sub.join("b.exr")).is_ok());
     }
@@ -199,6 +214,7 @@ mod tests {
         assert!(p(&[("--out", "a.jpg", What::Final)]).unwrap_err().contains(".png"));
         assert!(p(&[("--out", "a", What::Final)]).unwrap_err().contains(".png"));
         assert!(p(&[("--scatter-exr", "a.png", What::Scatter)]).unwrap_err().contains(".exr extension"));
+        assert!(p(&[("--depth-exr", "a.png", What::Depth)]).unwrap_err().contains(".exr extension"));
         let e = p(&[("--out", "a.exr", What::Final), ("--scatter-exr", "./a.exr", What::Scatter)]).unwrap_err();
         assert!(e.contains("same file"), "{e}");
         let input = d.path().join("scene.exr");

@@ -203,8 +203,15 @@ impl GpuContext {
 
     /// Reads an RGBA32Float texture back as `width * height * 4` floats.
     pub fn read_texture_rgba32f(&self, texture: &wgpu::Texture) -> Result<Vec<f32>, GpuError> {
+        self.read_texture_f32(texture, 4)
+    }
+
+    /// Reads a 32-bit float texture of `channels` channels (R32Float, Rg32Float, Rgba32Float) back
+    /// as `width * height * channels` floats, rows top to bottom.
+    pub fn read_texture_f32(&self, texture: &wgpu::Texture, channels: u32) -> Result<Vec<f32>, GpuError> {
         let (w, h) = (texture.width(), texture.height());
-        let row = (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let texel = 4 * channels;
+        let row = (w * texel).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("GpuContext::read_texture::staging"),
             size: row as u64 * h as u64,
@@ -224,10 +231,10 @@ impl GpuContext {
         );
         self.queue.submit([enc.finish()]);
         let bytes = self.map_read(&staging)?;
-        let mut out = Vec::with_capacity((w * h * 4) as usize);
+        let mut out = Vec::with_capacity((w * h * channels) as usize);
         for y in 0..h as usize {
             let start = y * row as usize;
-            out.extend_from_slice(bytemuck::cast_slice(&bytes[start..start + w as usize * 16]));
+            out.extend_from_slice(bytemuck::cast_slice(&bytes[start..start + (w * texel) as usize]));
         }
         Ok(out)
     }

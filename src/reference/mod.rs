@@ -157,6 +157,9 @@ pub struct ReferenceImage {
     pub hdr: Image,
     /// Distance `t` along the unit view ray to the first hit per pixel; `f32::INFINITY` for sky.
     pub depth: Vec<f32>,
+    /// With [`ViewEnds::Given`] ends: the pixels whose given end is not the reference's own first
+    /// hit (another surface, or sky against surface); 0 otherwise.
+    pub segments_differing: usize,
     pub stats: RenderStats,
 }
 
@@ -609,11 +612,18 @@ impl<'a> Reference<'a> {
 
     /// Traces the view ray `origin + t dir` and returns everything the reference knows about it.
     pub fn shade_ray(&self, origin: DVec3, dir: DVec3) -> RaySample {
+        self.shade_ray_ending(origin, dir, None)
+    }
+
+    /// [`Reference::shade_ray`], with the scattered light integrated up to `end` (infinity: the
+    /// sky) instead of the ray's own first hit when `end` is given. The surface term stays the
+    /// one at the ray's own first hit.
+    pub fn shade_ray_ending(&self, origin: DVec3, dir: DVec3, end: Option<f64>) -> RaySample {
         let mut stats = RenderStats::default();
         let v = dir.normalize();
         let hit = self.tracer.first_hit_stats(origin, v, f64::INFINITY, &mut stats.trace);
         let ds = hit.map_or(f64::INFINITY, |h| h.t);
-        let (scatter, lit) = self.scatter_range(origin, v, 0.0, ds, true, &mut stats);
+        let (scatter, lit) = self.scatter_range(origin, v, 0.0, end.unwrap_or(ds), true, &mut stats);
         let mut surface = [0.0; 3];
         let mut transmittance = [1.0; 3];
         if let Some(h) = hit {
@@ -696,6 +706,40 @@ pub fn render_pixels(
 
 /// Renders the whole `width x height` image, rows in parallel.
 pub fn render(scene: &Scene, width: u32, height: u32, opts: &ReferenceOptions) -> ReferenceImage {
+    render_ending(scene, width, height, opts, ViewEnds::OwnHits)
+}
+
+/// Where each view ray of [`render_ending`] ends its scattered light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ViewEnds<'a> {
+    /// At the ray's own first hit (the exact image).
+    OwnHits,
+    /// At the given distance per pixel (rows top to bottom; infinity for the sky), e.g. where a
+    /// GPU method's rasterizer put the surface ([`crate::render::Renderer::read_view_distances`]). The
+    /// scattered light is then exact along the *same view segments* the method integrated, which
+    /// separates its volumetric error from primary visibility: a rasterizer decides coverage on
+    /// its sub-pixel grid (1/256 pixel on llvmpipe), so a pixel centre that close to a silhouette
+    /// edge can land on either side of it.
+    Given(&'a [f32]),
+}
+
+/// [`render`], with the view rays' scattered light ending where `ends` says. With
+/// [`ViewEnds::Given`], [`ReferenceImage::depth`] still holds the reference's own first hits and
+/// [`ReferenceImage::segments_differing`] counts the pixels whose given end differs from them.
+///
+/// Panics if a given `ends` slice is not `width * height` long (the caller checks the file).
+pub fn render_ending(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    opts: &ReferenceOptions,
+    ends: ViewEnds,
+) -> ReferenceImage {
+    let ends = match ends {
+        ViewEnds::OwnHits => None,
+        ViewEnds::Given(e) => Some(e),
+    };
+    assert!(ends.is_none_or(|e| e.len() == width as usize * height as usize), "one view end per pixel");
     let start = Instant::now();
     let tracer = Tracer::new(scene);
     let r = Reference::new(scene, &tracer, *opts);
@@ -717,7 +761,9 @@ pub fn render(scene: &Scene, width: u32, height: u32, opts: &ReferenceOptions) -
             let mut st = RenderStats::default();
             let row: Vec<RaySample> = (0..width)
                 .map(|px| {
-                    let s = r.shade_ray(eye, scene.camera.pixel_dir_f64(px as f64, py as f64, width, height));
+                    let end = ends.map(|e| e[(py * width + px) as usize] as f64);
+                    let dir = scene.camera.pixel_dir_f64(px as f64, py as f64, width, height);
+                    let s = r.shade_ray_ending(eye, dir, end);
                     st.add(&s.stats);
                     s
                 })
@@ -731,17 +777,24 @@ pub fn render(scene: &Scene, width: u32, height: u32, opts: &ReferenceOptions) -
     let mut hdr = Image::new(width, height);
     let mut depth = Vec::with_capacity(width as usize * height as usize);
     let mut stats = RenderStats::default();
+    let mut segments_differing = 0;
     for (py, (row, st)) in rows.into_iter().enumerate() {
         stats.add(&st);
         for (px, s) in row.into_iter().enumerate() {
             let i = py * width as usize + px;
             scatter.pixels[i] = s.scatter.map(|x| x as f32);
             hdr.pixels[i] = s.hdr.map(|x| x as f32);
-            depth.push(s.hit.map_or(f32::INFINITY, |h| h.t as f32));
+            let own = s.hit.map_or(f32::INFINITY, |h| h.t as f32);
+            if let Some(e) = ends {
+                // A different surface, not f32 rounding of the same one: 0.1% of the distance.
+                let same = (own.is_infinite() && e[i].is_infinite()) || (own - e[i]).abs() <= 1e-3 * own.min(e[i]);
+                segments_differing += usize::from(!same);
+            }
+            depth.push(own);
         }
     }
     stats.seconds = start.elapsed().as_secs_f64();
-    ReferenceImage { scatter, hdr, depth, stats }
+    ReferenceImage { scatter, hdr, depth, segments_differing, stats }
 }
 
 #[cfg(test)]

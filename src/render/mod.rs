@@ -133,6 +133,8 @@ struct Targets {
     width: u32,
     height: u32,
     radiance: wgpu::TextureView,
+    /// Kept for [`Renderer::read_view_distances`].
+    distance_texture: wgpu::Texture,
     distance: wgpu::TextureView,
     depth: wgpu::TextureView,
     scatter: wgpu::Texture,
@@ -427,7 +429,7 @@ impl Renderer {
         let radiance =
             target("Renderer::surface_radiance", Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
         let distance =
-            target("Renderer::surface_distance", Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+            target("Renderer::surface_distance", Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC);
         let depth = target("Renderer::depth", Surface::DEPTH, U::RENDER_ATTACHMENT);
         let written = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
         let scatter = target("Renderer::scatter", Integrate::OUTPUT, written);
@@ -437,6 +439,7 @@ impl Renderer {
             height,
             radiance: view(&radiance),
             distance: view(&distance),
+            distance_texture: distance,
             depth: view(&depth),
             scatter_view: view(&scatter),
             scatter,
@@ -656,6 +659,22 @@ impl Renderer {
         let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
         let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
         Ok(RenderOutput { hdr, scatter, timings, setup, passes, variant })
+    }
+
+    /// Where the last frame's view rays end: the distance along each pixel's unit view ray to the
+    /// surface the rasterizer kept there (`f32::INFINITY` for the sky), rows top to bottom. Every
+    /// GPU method ends its rays there; the reference's own first hits are
+    /// [`crate::reference::ReferenceImage::depth`], and
+    /// [`crate::reference::ViewEnds::Given`] integrates along these instead.
+    pub fn read_view_distances(&self) -> Result<Vec<f32>, GpuError> {
+        let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
+        // The surface pass writes the distance in the first channel, negative for the sky.
+        Ok(self
+            .ctx
+            .read_texture_f32(&t.distance_texture, 2)?
+            .chunks_exact(2)
+            .map(|c| if c[0] >= 0.0 { c[0] } else { f32::INFINITY })
+            .collect())
     }
 
     /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the
