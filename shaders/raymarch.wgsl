@@ -36,7 +36,7 @@ struct March {
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
-@group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(3) var distance: texture_2d<f32>;
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(5) var<storage, read> march_in: March;
@@ -54,7 +54,7 @@ fn lit(p: vec3f) -> f32 {
     // just behind a surface are affected, and no normal exists in the medium to slope it by.
     var texel = shadow.params.y;
     if (POINT_LIGHT) { texel *= s.value; }
-    return select(0.0, 1.0, s.value <= shadow_stored(s.layer, floor(s.uv)) + 1.5 * texel);
+    return select(0.0, 1.0, s.value <= shadow_stored(s, floor(s.uv)) + 1.5 * texel);
 }
 
 // A well-mixed hash of the pixel (PCG), as a number in [0, 1).

@@ -2,16 +2,20 @@
 // slope-biased) and Raymarch (one nearest texel per step).
 //
 // The importing file declares `f: Frame`, `shadow: ShadowFaces` and `shadow_map:
-// texture_2d_array<f32>`. The map stores, per texel, the distance from the light to the nearest
-// surface (point light: |P - L| in a cube of six faces) or from a plane far on the light's side
-// (directional: one orthographic layer); a point is lit when its own value is within a bias of the
-// stored one.
+// texture_depth_2d_array`. The map holds only depth (shadow_map.wgsl); a point is lit when its own
+// value is within a bias of the value the stored depth gives along the point's own direction:
+//   point light (six faces, reversed infinite perspective, depth = near / a, a the distance along
+//   the face's axis):  stored = near / depth * |P - L| / a(P - L)   (the point's |P - L| units)
+//   directional (one orthographic layer, depth = s / far, s the distance from a plane far on the
+//   light's side):  stored = depth * far
+// An empty texel (depth 0 for the cube, 1 for the orthographic layer) stores "nothing": 3e38.
 
 // ShadowUniforms in shadow_map.rs (a layout test checks it).
 struct ShadowFaces {
     view_proj: array<mat4x4f, 6>,
     // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
-    // z: informational (the light type is the POINT_LIGHT override).
+    // z: informational (the light type is the POINT_LIGHT override), w: the cube's near distance
+    // (point) or the orthographic depth range (directional).
     params: vec4f,
     // Directional: the reference point far on the light's side.
     origin: vec4f,
@@ -31,17 +35,21 @@ struct ShadowCoords {
     uv: vec2f,
     // The point's own distance, to compare with the stored one.
     value: f32,
+    // Point light: near * |P - L| / a(P - L), so that a stored depth d means this / d.
+    per_depth: f32,
     // False outside the map: the map covers every caster but backdrops (Scene::core_bounds), so a
     // point projecting outside it can only be shadowed by a backdrop, which lies under everything.
     inside: bool,
 }
 
 fn shadow_coords(p: vec3f) -> ShadowCoords {
-    var s = ShadowCoords(0u, vec2f(0.0), 0.0, false);
+    var s = ShadowCoords(0u, vec2f(0.0), 0.0, 0.0, false);
     if (POINT_LIGHT) {
         let d = p - f.light.xyz;
         s.layer = cube_face(d);
         s.value = length(d);
+        let a = abs(d);
+        s.per_depth = shadow.params.w * s.value / max(max(a.x, a.y), max(a.z, 1e-30));
     } else {
         s.value = dot(shadow.origin.xyz - p, f.light.xyz);
     }
@@ -54,8 +62,12 @@ fn shadow_coords(p: vec3f) -> ShadowCoords {
     return s;
 }
 
-// The stored distance of texel c (clamped into the map) of a layer.
-fn shadow_stored(layer: u32, c: vec2f) -> f32 {
+// The distance texel c (clamped into the map) stores along s's direction, in s.value's units.
+fn shadow_stored(s: ShadowCoords, c: vec2f) -> f32 {
     let n = shadow.params.x;
-    return textureLoad(shadow_map, vec2i(clamp(c, vec2f(0.0), vec2f(n - 1.0))), i32(layer), 0).x;
+    let depth = textureLoad(shadow_map, vec2i(clamp(c, vec2f(0.0), vec2f(n - 1.0))), i32(s.layer), 0);
+    if (POINT_LIGHT) {
+        return select(s.per_depth / depth, 3.0e38, depth <= 0.0);
+    }
+    return select(depth * shadow.params.w, 3.0e38, depth >= 1.0);
 }

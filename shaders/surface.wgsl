@@ -16,7 +16,7 @@
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
-@group(0) @binding(2) var shadow_map: texture_2d_array<f32>;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -54,7 +54,7 @@ fn visibility(p: vec3f, bias: f32) -> f32 {
     var lit = vec4f(0.0);
     for (var k = 0; k < 4; k++) {
         let o = vec2f(f32(k & 1), f32(k >> 1));
-        lit[k] = select(0.0, 1.0, s.value <= shadow_stored(s.layer, base + o) + bias);
+        lit[k] = select(0.0, 1.0, s.value <= shadow_stored(s, base + o) + bias);
     }
     return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
 }

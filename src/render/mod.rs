@@ -799,6 +799,9 @@ mod binding_tests {
                     };
                     Kind::StorageTexture(format)
                 }
+                (_, naga::TypeInner::Image { class: naga::ImageClass::Depth { multi: false }, arrayed: true, .. }) => {
+                    Kind::DepthArray
+                }
                 (_, naga::TypeInner::Image { arrayed: true, .. }) => Kind::TextureArray,
                 (_, naga::TypeInner::Image { .. }) => Kind::Texture,
                 (space, inner) => panic!("{file}: binding {} has an unexpected kind {space:?} {inner:?}", rb.binding),

@@ -26,7 +26,7 @@ bindings! {
     RaymarchBindings {
         frame_in: Kind::Storage,
         shadow_in: Kind::Storage,
-        shadow_map: Kind::TextureArray,
+        shadow_map: Kind::DepthArray,
         distance: Kind::Texture,
         scatter_out: Kind::StorageTexture(Raymarch::OUTPUT),
         march_in: Kind::Storage,

@@ -11,7 +11,7 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Surface's bind group (surface.wgsl).
-    SurfaceBindings { frame_in: Kind::Storage, shadow_in: Kind::Storage, shadow_map: Kind::TextureArray }
+    SurfaceBindings { frame_in: Kind::Storage, shadow_in: Kind::Storage, shadow_map: Kind::DepthArray }
 }
 
 /// The pass's render targets, `width x height`.

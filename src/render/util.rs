@@ -12,6 +12,8 @@ pub enum Kind {
     Texture,
     /// `texture_2d_array<f32>`, not filterable.
     TextureArray,
+    /// `texture_depth_2d_array` (loaded, never sampled or compared).
+    DepthArray,
     /// `texture_storage_2d<format, write>`.
     StorageTexture(wgpu::TextureFormat),
 }
@@ -24,6 +26,14 @@ impl Kind {
             Kind::StorageRw => storage_entry(binding, visibility, false),
             Kind::Texture => texture_entry(binding, visibility, wgpu::TextureViewDimension::D2),
             Kind::TextureArray => texture_entry(binding, visibility, wgpu::TextureViewDimension::D2Array),
+            Kind::DepthArray => wgpu::BindGroupLayoutEntry {
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                ..texture_entry(binding, visibility, wgpu::TextureViewDimension::D2Array)
+            },
             Kind::StorageTexture(format) => {
                 wgpu::BindGroupLayoutEntry { visibility, ..storage_texture_entry(binding, format) }
             }
