@@ -12,9 +12,9 @@
 mod common;
 
 use common::*;
+use epivox::metrics;
 use epivox::params::{Grid, Light};
 use epivox::reference::{self, ReferenceOptions};
-use epivox::metrics;
 use epivox::render::Method;
 use glam::Vec3;
 

@@ -428,8 +428,11 @@ impl Renderer {
         let target = |label, format, usage| texture_2d(d, label, width, height, 1, format, usage);
         let radiance =
             target("Renderer::surface_radiance", Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
-        let distance =
-            target("Renderer::surface_distance", Surface::DISTANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC);
+        let distance = target(
+            "Renderer::surface_distance",
+            Surface::DISTANCE,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
+        );
         let depth = target("Renderer::depth", Surface::DEPTH, U::RENDER_ATTACHMENT);
         let written = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
         let scatter = target("Renderer::scatter", Integrate::OUTPUT, written);

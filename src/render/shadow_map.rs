@@ -424,8 +424,11 @@ fn light_rectangle(core: &crate::scene::Aabb, view: Mat4, size: u32) -> (glam::V
     let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
     for i in 0..8 {
         let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
-        let corner =
-            Vec3::new(pick(1, core.min.x, core.max.x), pick(2, core.min.y, core.max.y), pick(4, core.min.z, core.max.z));
+        let corner = Vec3::new(
+            pick(1, core.min.x, core.max.x),
+            pick(2, core.min.y, core.max.y),
+            pick(4, core.min.z, core.max.z),
+        );
         let p = view.transform_point3(corner).truncate();
         lo = lo.min(p);
         hi = hi.max(p);
