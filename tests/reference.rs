@@ -634,14 +634,18 @@ fn extreme_cases_stay_finite() {
 // Whole images and timing
 // ------------------------------------------------------------------------------------------------
 
+/// A room under a point light seen from above its floor, and 64-sample options: small images.
+fn small_lit_room() -> (Scene, ReferenceOptions) {
+    let cam = Camera { eye: Vec3::new(1.0, 2.0, 6.0), target: Vec3::new(0.0, 1.0, 0.0), ..Camera::default() };
+    let light = Light::Point { position: Vec3::new(0.5, 3.0, 0.5), intensity: Vec3::splat(30.0), radius: 0.0 };
+    (room(light, Medium::default(), cam), ReferenceOptions { samples: 64, ..opts() })
+}
+
 /// The pixel convention: `render` and `render_pixels` agree, pixel (px, py) is the ray
 /// `camera.pixel_dir_f64(px, py, w, h)` from the eye.
 #[test]
 fn render_and_render_pixels_agree() {
-    let cam = Camera { eye: Vec3::new(1.0, 2.0, 6.0), target: Vec3::new(0.0, 1.0, 0.0), ..Camera::default() };
-    let light = Light::Point { position: Vec3::new(0.5, 3.0, 0.5), intensity: Vec3::splat(30.0), radius: 0.0 };
-    let s = room(light, Medium::default(), cam);
-    let o = ReferenceOptions { samples: 64, ..opts() };
+    let (s, o) = small_lit_room();
     let (w, h) = (12, 9);
     let img = reference::render(&s, w, h, &o);
     let px = [(0u32, 0u32), (11, 0), (5, 4), (11, 8)];
@@ -661,15 +665,12 @@ fn render_and_render_pixels_agree() {
     }
 }
 
-/// `render_ending` with given view ends: its own first hits reproduce `render` to the bit; a pixel
+/// `render_ending` with given view ends: its own first hits reproduce `render` (to 1e-6); a pixel
 /// given another end changes alone, to the scattered light exactly along that segment, and is
 /// counted as differing.
 #[test]
 fn render_ending_follows_the_given_view_ends() {
-    let cam = Camera { eye: Vec3::new(1.0, 2.0, 6.0), target: Vec3::new(0.0, 1.0, 0.0), ..Camera::default() };
-    let light = Light::Point { position: Vec3::new(0.5, 3.0, 0.5), intensity: Vec3::splat(30.0), radius: 0.0 };
-    let s = room(light, Medium::default(), cam);
-    let o = ReferenceOptions { samples: 64, ..opts() };
+    let (s, o) = small_lit_room();
     let (w, h) = (12, 9);
     let own = reference::render(&s, w, h, &o);
     assert_eq!(own.segments_differing, 0);

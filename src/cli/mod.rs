@@ -412,7 +412,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
 
     let mut pruned_z = None;
     let mut segments_differing = None;
-    let depth: Vec<f32>;
+    // Where the view rays end, when something will be written from it.
+    let depth: Option<Vec<f32>>;
     let (hdr, scatter, out, adapter): (Image, Image, Option<RenderOutput>, String) = match args.method {
         Method::Reference => {
             let mut opts = reference::ReferenceOptions { progress: !args.json, ..Default::default() };
@@ -427,7 +428,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             if view_ends.is_some() {
                 segments_differing = Some(r.segments_differing);
             }
-            depth = r.depth;
+            depth = Some(r.depth);
             (r.hdr, r.scatter, None, "cpu reference (f64)".to_string())
         }
         Method::Vsv | Method::Cartesian | Method::Raymarch => {
@@ -444,7 +445,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.prune = !args.no_prune;
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
-            depth = if args.depth_exr.is_some() { renderer.read_view_distances()? } else { vec![0.0; pixels as usize] };
+            depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())
         }
     };
@@ -452,8 +453,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     if hdr.count_non_finite() > 0 || scatter.count_non_finite() > 0 {
         log::warn!("the image has {} non-finite values", hdr.count_non_finite() + scatter.count_non_finite());
     }
-    let depth = Image::from_pixels(w, h, depth.iter().map(|&d| [d; 3]).collect())?;
-    outputs::write_all(&outputs, &outputs::Rendered { hdr: &hdr, scatter: &scatter, depth: &depth }, exposure)?;
+    let depth = depth.map(|d| Image::from_pixels(w, h, d.iter().map(|&t| [t; 3]).collect())).transpose()?;
+    outputs::write_all(&outputs, &outputs::Rendered { hdr: &hdr, scatter: &scatter, depth: depth.as_ref() }, exposure)?;
 
     let timings = out.as_ref().map(|o| o.timings.clone()).unwrap_or_default();
     let total_ms: f64 = timings.iter().map(|t| t.ms).sum();

@@ -24,7 +24,8 @@ pub enum What {
 pub struct Rendered<'a> {
     pub hdr: &'a Image,
     pub scatter: &'a Image,
-    pub depth: &'a Image,
+    /// Only when a `--depth-exr` output was asked for.
+    pub depth: Option<&'a Image>,
 }
 
 /// An image file format, from the path's extension.
@@ -156,7 +157,7 @@ pub fn write_all(outputs: &[Output], images: &Rendered, exposure: f32) -> Result
     for o in outputs {
         let image = match o.what {
             What::Scatter => images.scatter,
-            What::Depth => images.depth,
+            What::Depth => images.depth.with_context(|| format!("{}: no view distances were rendered", o.flag))?,
             What::Final | What::Hdr => images.hdr,
         };
         let s = match o.format {
@@ -193,7 +194,7 @@ mod tests {
             .unwrap();
         std::fs::remove_dir(&sub).unwrap();
         let img = Image::new(2, 2);
-        let images = Rendered { hdr: &img, scatter: &img, depth: &img };
+        let images = Rendered { hdr: &img, scatter: &img, depth: None };
         let err = write_all(&plan, &images, 0.0).unwrap_err();
         assert!(format!("{err:#}").contains("b.exr"), "{err:#}");
         assert_eq!(std::fs::read(&first).unwrap(), b"old");

@@ -422,13 +422,7 @@ impl ShadowMap {
 /// `view`, with half a texel of margin and never a zero-width side (a flat scene seen edge-on).
 fn light_rectangle(core: &crate::scene::Aabb, view: Mat4, size: u32) -> (glam::Vec2, glam::Vec2) {
     let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
-    for i in 0..8 {
-        let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
-        let corner = Vec3::new(
-            pick(1, core.min.x, core.max.x),
-            pick(2, core.min.y, core.max.y),
-            pick(4, core.min.z, core.max.z),
-        );
+    for corner in core.corners() {
         let p = view.transform_point3(corner).truncate();
         lo = lo.min(p);
         hi = hi.max(p);
@@ -454,12 +448,7 @@ mod tests {
         let (lo, hi) = light_rectangle(&core, view, size);
         let texel = (hi - lo) / size as f32;
         let (mut seen_lo, mut seen_hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
-        for i in 0..8 {
-            let c = Vec3::new(
-                if i & 1 == 0 { core.min.x } else { core.max.x },
-                if i & 2 == 0 { core.min.y } else { core.max.y },
-                if i & 4 == 0 { core.min.z } else { core.max.z },
-            );
+        for c in core.corners() {
             let p = view.transform_point3(c).truncate();
             assert!(p.cmpge(lo).all() && p.cmple(hi).all(), "corner {c} at {p} outside {lo}..{hi}");
             seen_lo = seen_lo.min(p);

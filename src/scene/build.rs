@@ -19,13 +19,8 @@ pub fn quad(name: &str, c: Vec3, u: Vec3, v: Vec3) -> Mesh {
 /// An axis-aligned box with centre `c` and half-extent `h` (albedo 0.5); `open_top` leaves out the
 /// +y face.
 pub fn cuboid(name: &str, c: Vec3, h: Vec3, open_top: bool) -> Mesh {
-    let positions = (0..8)
-        .map(|i| {
-            let s = |bit: u32| if i & bit == 0 { -1.0 } else { 1.0 };
-            c + h * Vec3::new(s(1), s(2), s(4))
-        })
-        .collect();
-    // faces: -z, +z, -y, +y, -x, +x (corner bits: 1 = x, 2 = y, 4 = z)
+    let positions = crate::scene::Aabb { min: c - h, max: c + h }.corners().to_vec();
+    // faces: -z, +z, -y, +y, -x, +x (corner bits as Aabb::corners: 1 = x, 2 = y, 4 = z)
     let faces: [(u32, [u32; 4]); 6] = [
         (0, [0, 1, 3, 2]),
         (1, [4, 6, 7, 5]),
