@@ -59,7 +59,8 @@ struct Frame {
     grid: vec4u,
     // image width, height, unused (the phase function is the PHASE override), flags.
     image: vec4u,
-    // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); unused.
+    // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); Voxelize's
+    // work items per thread (voxelize.wgsl).
     table: vec4u,
 }
 

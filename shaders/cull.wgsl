@@ -12,8 +12,9 @@
 //
 // `offsets_local` and `offsets_blocks` turn the counts into exclusive prefix sums (1024 per
 // workgroup, then the block sums in one workgroup), and `offsets_blocks` writes Voxelize's
-// indirect dispatch for the total: every item gets one thread, so a wall that covers every plane
-// is spread over thousands of threads and a sliver costs one or two.
+// indirect dispatch for the total: every item (or run of f.table.w items, Voxelize) gets one
+// thread, so a wall that covers every plane is spread over thousands of threads and a sliver costs
+// one or two.
 
 #import common
 #import triangle_bounds
@@ -163,11 +164,13 @@ fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
     }
     if (lid == 0u) {
         // A saturated total cannot be told from a true one: cap the list below it and count what is cut.
-        let total = min(carry, 0xffffffffu - VOXEL_GROUP);
+        // Voxelize's threads take runs of f.table.w items (at least 1).
+        let per_group = VOXEL_GROUP * max(f.table.w, 1u);
+        let total = min(carry, 0xffffffffu - per_group);
         if (carry == 0xffffffffu) { atomicAdd(&counters[6], 1u); }
         atomicStore(&counters[3], total);
         atomicAdd(&counters[5], total);
-        let groups = (total + VOXEL_GROUP - 1u) / VOXEL_GROUP;
+        let groups = (total + per_group - 1u) / per_group;
         let gx = min(groups, MAX_GROUPS);
         dispatch[3] = gx;
         dispatch[4] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;

@@ -82,13 +82,12 @@ struct Pieces {
 
 var<private> pieces: Pieces;
 
-// Every shadow boundary of every pixel evaluates this (most of the pass on the classroom); in a
-// grey medium (GREY_MEDIUM, a pipeline constant) one channel's exponentials stand for all three,
-// the same values to the bit.
-fn piece_integral(i: u32, t: f32) -> vec3f {
-    let len = max(t - pieces.start[i], 0.0);
-    let k = pieces.k[i];
-    let g_min = max(0.0, pieces.g[i] + min(k, 0.0) * len);
+// The integral over the piece starting at `start` (exponent g there, slope k) up to t. Every
+// shadow boundary of every pixel evaluates this; in a grey medium (GREY_MEDIUM, a pipeline
+// constant) one channel's exponentials stand for all three, the same values to the bit.
+fn piece_integral(start: f32, g: f32, k: f32, t: f32) -> vec3f {
+    let len = max(t - start, 0.0);
+    let g_min = max(0.0, g + min(k, 0.0) * len);
     if (GREY_MEDIUM) {
         let s = f.sigma_t.x;
         return vec3f(exp(-s * g_min) * len * one_minus_exp_over_x1(s * (abs(k) * len)));
@@ -139,22 +138,45 @@ fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
         var a = 0u;
         if (ls.y < ls[a]) { a = 1u; }
         if (ls.z < ls[a]) { a = 2u; }
+        let g = max(0.0, max(0.0, alpha[a] + beta[a] * p0) + p0 - t_in);
+        let k = beta[a] + 1.0;
         pieces.start[i] = p0;
-        pieces.g[i] = max(0.0, max(0.0, alpha[a] + beta[a] * p0) + p0 - t_in);
-        pieces.k[i] = beta[a] + 1.0;
+        pieces.g[i] = g;
+        pieces.k[i] = k;
         pieces.cum[i] = cum;
-        cum += piece_integral(i, p1);
+        cum += piece_integral(p0, g, k, p1);
     }
     pieces.count = n;
 }
 
-// integral_{t_in}^{t} (t inside [t_in, t_end]).
+// integral_{t_in}^{t} (t inside [t_in, t_end]). The piece is chosen with constant indices only:
+// on llvmpipe an index that differs between the lanes of a SIMD group is a gather from memory,
+// and this runs at every shadow boundary (written as a loop it was a third of the pass on the
+// classroom).
 fn along(t: f32) -> vec3f {
-    var i = 0u;
-    for (var j = 1u; j < pieces.count; j++) {
-        if (t >= pieces.start[j]) { i = j; }
+    var start = pieces.start[0];
+    var g = pieces.g[0];
+    var k = pieces.k[0];
+    var cum = pieces.cum[0];
+    if (pieces.count > 1u && t >= pieces.start[1]) {
+        start = pieces.start[1];
+        g = pieces.g[1];
+        k = pieces.k[1];
+        cum = pieces.cum[1];
     }
-    return pieces.cum[i] + piece_integral(i, t);
+    if (pieces.count > 2u && t >= pieces.start[2]) {
+        start = pieces.start[2];
+        g = pieces.g[2];
+        k = pieces.k[2];
+        cum = pieces.cum[2];
+    }
+    if (pieces.count > 3u && t >= pieces.start[3]) {
+        start = pieces.start[3];
+        g = pieces.g[3];
+        k = pieces.k[3];
+        cum = pieces.cum[3];
+    }
+    return cum + piece_integral(start, g, k, t);
 }
 
 // ---- both: U at a bin boundary --------------------------------------------------------------

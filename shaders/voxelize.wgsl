@@ -12,8 +12,8 @@
 // same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
 // light (Integrate blends rays forward only, so it never leaks through a closed surface).
 //
-// One thread per item of the Cull pass's work list: one triangle, one plane, one 32-bit word of
-// bins. In the plane, the triangle is a segment (its edges' crossings of the plane); along a
+// Work comes from the Cull pass's list, one item per triangle, plane and 32-bit word of bins; a
+// thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the triangle is a segment (its edges' crossings of the plane); along a
 // segment z and gamma are both monotonic, so the bins whose centre z lies in the segment's z range
 // are exactly the light rays that hit it, and the hit of each follows in closed form.
 //
@@ -163,17 +163,43 @@ fn main(
     @builtin(local_invocation_index) lid: u32,
 ) {
     f = frame_in;
-    let item = (wg.y * groups.x + wg.x) * 64u + lid;
-    if (item >= counters[3]) { return; }
-    let found = find_item(item);
-    let rec = records[found.x];
-    let words = rec.w >> 16u;
-    let w = (rec.w & 0xffffu) + found.y % words;
-    var x = rec.y + found.y / words;
-    if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
+    let total = counters[3];
+    // A run of `run` consecutive items (the renderer's choice per adapter, cull.wgsl sizes the
+    // dispatch by it): one search for the first, then the list is walked. A triangle's items are
+    // consecutive, so its record and vertices are read once per run.
+    let run = max(f.table.w, 1u);
+    let first = ((wg.y * groups.x + wg.x) * 64u + lid) * run;
+    if (first >= total) { return; }
+    let found = find_item(first);
+    var slot = found.x;
+    var within = found.y;
+    var rec = records[slot];
+    var p = triangle(rec.x);
+    let last = first + min(run, total - first);
+    for (var item = first; item < last; item++) {
+        if (within == rec.z * (rec.w >> 16u)) {
+            slot++;
+            within = 0u;
+            rec = records[slot];
+            p = triangle(rec.x);
+        }
+        voxelize_item(rec, within, p);
+        within++;
+    }
+}
+
+// Triangle `tri`'s vertices relative to the eye.
+fn triangle(tri: u32) -> array<vec3f, 3> {
     let e = f.eye.xyz;
-    let tri = rec.x;
-    let p = array<vec3f, 3>(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
+    return array<vec3f, 3>(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
+}
+
+// Item `within` of the triangle with record `rec` (vertices p): one plane, one word of bins.
+fn voxelize_item(rec: vec4u, within: u32, p: array<vec3f, 3>) {
+    let words = rec.w >> 16u;
+    let w = (rec.w & 0xffffu) + within % words;
+    var x = rec.y + within / words;
+    if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
     run_cell = -1;
     run_mask = 0u;
     let offset = bin_offset(x);

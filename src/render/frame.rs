@@ -47,7 +47,7 @@ pub struct FrameUniforms {
     /// Image width and height, unused, flags (`FLAG_*`).
     pub image: UVec4,
     /// Scatter-table rows and columns, the Cartesian grid's light axis (0 +right, 1 -right, 2 +up,
-    /// 3 -up), unused.
+    /// 3 -up), Voxelize's work items per thread (the renderer sets it: [`super::Voxelize`]).
     pub table: UVec4,
 }
 
@@ -205,7 +205,7 @@ impl FrameSetup {
             medium_max: mb.max.extend(0.0),
             grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
             image: UVec4::new(width, height, 0, flags),
-            table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
+            table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 1),
         };
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
     }

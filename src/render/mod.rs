@@ -166,7 +166,7 @@ impl Passes {
                 surface: Surface::new(d, lib)?,
                 ranges: Ranges::new(d, lib)?,
                 cull: Cull::new(d, lib)?,
-                voxelize: Voxelize::new(d, lib)?,
+                voxelize: Voxelize::new(d, lib, ctx.info.device_type)?,
                 scan: Scan::new(d, lib)?,
                 scatter_table: ScatterTable::new(d, lib)?,
                 integrate: Integrate::new(d, lib)?,
@@ -529,7 +529,8 @@ impl Renderer {
                 mapped_at_creation: false,
             }));
         }
-        let setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
+        let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
+        setup.uniforms.table.w = self.passes.voxelize.items_per_thread;
         let variant =
             Variant::new(setup.frame.is_point(), &scene.medium.phase, setup.uniforms.sigma_t.truncate().to_array());
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
