@@ -681,6 +681,12 @@ impl Renderer {
             .collect())
     }
 
+    /// Voxelize's work items per thread (at least 1; the adapter's choice until set:
+    /// [`Voxelize::items_per_thread`]). Any value gives the same grid; tests compare them.
+    pub fn set_voxelize_items_per_thread(&mut self, items: u32) {
+        self.passes.voxelize.items_per_thread = items.max(1);
+    }
+
     /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the
     /// inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
