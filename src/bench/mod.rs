@@ -141,10 +141,10 @@ impl Point {
     }
 }
 
-/// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, and 256² / 1024² at a few
-/// bin counts), the same for the Cartesian grid at fewer points, and the raymarch at 16 to 1024
-/// steps with a 2048² shadow map plus 512² to 4096² maps at 256 steps (and a jittered and a
-/// 1024-step / 4096² point). `quick`: two or three tiny points per method. [`run`] extends the
+/// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, 256² / 1024² at a few bin
+/// counts, the default grid and twice its planes), the same for the Cartesian grid at fewer
+/// points, and the raymarch at 16 to 1024 steps with a 2048² shadow map plus 512² to 4096² maps at
+/// 256 steps (and a jittered point, and 512 and 1024 steps on the 4096² map). `quick`: two or three tiny points per method. [`run`] extends the
 /// march to 2048 and 4096 steps on the 4096² map while none of these is as accurate as VSV's
 /// default grid.
 pub fn error_sweep(quick: bool) -> Vec<Point> {
@@ -167,6 +167,11 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     for (pr, bins) in [(256, 64), (256, 256), (1024, 64), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Vsv, pr, pr, bins, map));
     }
+    // The product's default and twice its planes (half as many rays as planes: Grid::default).
+    let g = Grid::default();
+    for planes in [g.planes, 2 * g.planes] {
+        v.push(Point::grid(Vsv, planes, g.rays, g.bins, map));
+    }
     for (pr, bins) in [(512, 64), (512, 256), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Cartesian, pr, pr, bins, map));
     }
@@ -176,6 +181,7 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     for m in [512, 1024, 4096] {
         v.push(Point::march(256, m, false));
     }
+    v.push(Point::march(512, 4096, false));
     v.push(Point::march(1024, 4096, false));
     v.push(Point::march(64, map, true));
     v
@@ -521,7 +527,9 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     // none, double the most accurate march's steps on the largest map (up to CHASE_MAX_STEPS),
     // as long as that still lowers its error (a map-limited march does not get better).
     if !opts.quick {
-        let default_grid = Point::grid(Method::Vsv, 1024, 1024, 256, crate::params::Baseline::default().shadow_map);
+        let g = Grid::default();
+        let default_grid =
+            Point::grid(Method::Vsv, g.planes, g.rays, g.bins, crate::params::Baseline::default().shadow_map);
         let target = rows.iter().find(|r| r.point == default_grid).map(|r| r.scatter.rel_rmse);
         let march_best = |rows: &[Row]| {
             rows.iter()
