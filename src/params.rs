@@ -453,14 +453,19 @@ impl std::fmt::Display for Grid {
 /// moved from the view rays to the light rays. A shadow's edge in the medium is placed by the
 /// planes and bins (light space); the rays only order casters before receivers along a view ray.
 /// Measured at 512x512 against the exact reference (relative RMSE of the scattered light, built-in
-/// room along VSV's own view segments; llvmpipe, the classroom's GPU time in parentheses):
+/// room along VSV's own view segments):
 ///
 /// | scene | 1024x1024x256 | 1024x512x512 |
 /// |---|---:|---:|
 /// | built-in room | 1.84% | 1.21% |
 /// | Cornell box | 0.61% | 0.36% |
-/// | classroom | 2.87% (547 ms) | 2.16% (661 ms) |
+/// | classroom | 2.87% | 2.16% |
 /// | bunny | 0.032% | 0.039% |
+///
+/// It is not free: twice the bins are twice Voxelize's work items and words to walk, 20-40% more
+/// GPU time on llvmpipe (the classroom 417 -> 592 ms in one bench run). Both grids lie on VSV's
+/// error-against-time curve (docs/results.md); this one is the point past the visible half-bin
+/// steps along the classroom's shafts.
 impl Default for Grid {
     fn default() -> Self {
         Grid { planes: 1024, rays: 512, bins: 512, spacing: BinSpacing::UniformAngle }
