@@ -13,9 +13,10 @@
 // light (Integrate blends rays forward only, so it never leaks through a closed surface).
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and 32-bit word of bins; a
-// thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the triangle is a segment (its edges' crossings of the plane); along a
-// segment z and gamma are both monotonic, so the bins whose centre z lies in the segment's z range
-// are exactly the light rays that hit it, and the hit of each follows in closed form.
+// thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the
+// triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are both
+// monotonic, so the bins whose centre z lies in the segment's z range are exactly the light rays
+// that hit it, and the hit of each follows in closed form.
 //
 // Watertight: a crossing on an edge is computed from the edge's two vertices in a canonical order,
 // so the two triangles that share the edge get the same point bit for bit; a vertex on the plane is
