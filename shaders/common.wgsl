@@ -160,6 +160,14 @@ fn z_along(f: Frame, gamma: f32, t: f32) -> f32 {
 
 // ---- the grid's (plane, ray) axes, epipolar or Cartesian -----------------------------------
 
+// The first word of grid ray (plane x, ray y). The grid is plane-major: a plane's rays follow one
+// another, each `words` words long (Grid::ray_offset in Rust). A light ray (fixed x and bin)
+// therefore steps `words` words from one ray cell to the next: the scan streams down it, and a
+// Voxelize item's ORs into consecutive cells fall in neighbouring cache lines.
+fn ray_offset(f: Frame, x: u32, y: u32) -> u32 {
+    return (x * f.grid.y + y) * f.grid.w;
+}
+
 fn is_cartesian(f: Frame) -> bool { return (f.image.w & FLAG_CARTESIAN) != 0u; }
 
 // Continuous (plane, ray) coordinates of a view direction. Cartesian (the paper's section 2): a

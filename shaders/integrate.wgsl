@@ -282,10 +282,6 @@ fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32)
 
 // ---- per pixel -----------------------------------------------------------------------------
 
-fn ray_base(x: u32, y: u32) -> u32 {
-    return (y * f.grid.x + x) * f.grid.w;
-}
-
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     f = frame_in;
@@ -327,7 +323,12 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let y1 = min(y0 + 1u, rays - 1u);
     let fy = yf - f32(y0);
     let weights = vec4f((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
-    let bases = vec4u(ray_base(u32(x0), y0), ray_base(u32(x1), y0), ray_base(u32(x0), y1), ray_base(u32(x1), y1));
+    let bases = vec4u(
+        ray_offset(f, u32(x0), y0),
+        ray_offset(f, u32(x1), y0),
+        ray_offset(f, u32(x0), y1),
+        ray_offset(f, u32(x1), y1),
+    );
 
     var l = vec3f(0.0);
     if (is_point_light()) {

@@ -4,8 +4,9 @@
 //
 // Along a light ray (fixed plane x and bin k) gamma grows with y, so after the scan a set bit means
 // "some caster lies between this voxel and the light". One thread per (plane, 32-bit word); the grid
-// is ray-major ((ray * planes + plane) * words + word), so neighbouring threads touch neighbouring
-// words at every step. Read once, written once: bandwidth bound.
+// is plane-major ((plane * rays + ray) * words + word, common.wgsl), so a thread streams down its
+// light rays `words` words at a time, and the threads of one plane touch neighbouring words at
+// every step. Read once, written once: bandwidth bound.
 
 #import common
 
@@ -23,10 +24,10 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let words = f.grid.w;
     let column = id.x; // plane * words + word
     if (column >= planes * words) { return; }
-    let stride = planes * words;
+    let base = ray_offset(f, column / words, 0u) + column % words;
     var acc = 0u;
     for (var y = 0u; y < rays; y++) {
-        let i = y * stride + column;
+        let i = base + y * words;
         acc = acc | grid[i];
         grid[i] = acc;
     }

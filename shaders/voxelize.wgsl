@@ -132,7 +132,7 @@ var<private> run_mask: u32;
 
 fn flush(x: u32, w: u32) {
     if (run_mask != 0u && run_cell >= 0) {
-        atomicOr(&grid[(u32(run_cell) * f.grid.x + x) * f.grid.w + w], run_mask);
+        atomicOr(&grid[ray_offset(f, x, u32(run_cell)) + w], run_mask);
     }
     run_mask = 0u;
 }

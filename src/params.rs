@@ -414,6 +414,13 @@ impl Grid {
         self.bins / 32
     }
 
+    /// The index of the first word of grid ray (`plane`, `ray`) in the grid buffer
+    /// ([`crate::render::Renderer::read_grid`]): plane-major, each ray [`Grid::words`] long
+    /// (`ray_offset` in common.wgsl).
+    pub fn ray_offset(&self, plane: u32, ray: u32) -> usize {
+        (plane as usize * self.rays as usize + ray as usize) * self.words() as usize
+    }
+
     /// Bytes of one grid buffer.
     pub fn bytes(&self) -> u64 {
         self.planes as u64 * self.rays as u64 * self.words() as u64 * 4

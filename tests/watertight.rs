@@ -75,11 +75,11 @@ fn every_sampled_light_ray_meets_a_closed_mesh() {
                 let s = scene(mesh.clone(), light, g);
                 r.render(&s, 32, 32, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
                 let bits = r.read_geometry_grid().unwrap_or_else(|e| panic!("{e}"));
-                let (p, w) = (g.planes as usize, g.words() as usize);
+                let p = g.planes as usize;
                 let mut missed = Vec::new();
-                for x in 0..p {
+                for x in 0..g.planes {
                     for k in 0..g.bins as usize {
-                        let hit = (0..g.rays as usize).any(|y| bits[(y * p + x) * w + k / 32] >> (k % 32) & 1 == 1);
+                        let hit = (0..g.rays).any(|y| bits[g.ray_offset(x, y) + k / 32] >> (k % 32) & 1 == 1);
                         if !hit {
                             missed.push((x, k));
                         }

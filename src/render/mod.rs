@@ -687,8 +687,8 @@ impl Renderer {
         self.passes.voxelize.items_per_thread = items.max(1);
     }
 
-    /// The shadow volume of the last frame, `rays x planes x words` words (ray-major), for the
-    /// inspector and tests.
+    /// The shadow volume of the last frame, `planes x rays x words` words (plane-major: ray
+    /// (`plane`, `ray`) starts at [`Grid::ray_offset`]), for the inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
         let (_, bits) = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
         Ok(bytemuck::cast_slice(&self.ctx.read_buffer(bits)?).to_vec())

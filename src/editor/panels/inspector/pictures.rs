@@ -75,9 +75,8 @@ impl GridSnapshot {
     }
 
     fn ray_words<'a>(&self, bits: &'a [u32], plane: u32, ray: u32) -> &'a [u32] {
-        let w = self.grid.words() as usize;
-        let i = (ray as usize * self.grid.planes as usize + plane as usize) * w;
-        bits.get(i..i + w).unwrap_or(&[])
+        let i = self.grid.ray_offset(plane, ray);
+        bits.get(i..i + self.grid.words() as usize).unwrap_or(&[])
     }
 
     /// For a point light: the angle at the eye of each ray and at the light of each bin; a voxel
@@ -289,7 +288,7 @@ mod tests {
         let grid = Grid { planes: 8, rays: 8, bins: 64, ..Grid::default() };
         let mut shadow = vec![0u32; 8 * 8 * 2];
         // plane 3, ray 5: all 64 bins; plane 0 ray 0: bin 0.
-        let i = (5 * 8 + 3) * 2;
+        let i = grid.ray_offset(3, 5);
         shadow[i] = u32::MAX;
         shadow[i + 1] = u32::MAX;
         shadow[0] = 1;
