@@ -289,6 +289,8 @@ impl Renderer {
     /// parse or validate, or a pipeline wgpu refuses — the old pipelines stay and keep rendering.
     pub fn reload(&mut self, lib: &ShaderLibrary) -> Result<(), GpuError> {
         let mut passes = Passes::new(&self.ctx, lib, self.passes.shadow_map.size)?;
+        // A run length set with set_voxelize_items_per_thread survives the reload.
+        passes.voxelize.items_per_thread = self.passes.voxelize.items_per_thread;
         // Build what the current picture needs now, so that a shader wgpu refuses for this variant
         // fails here, with the old pipelines still in place.
         if let Some(v) = self.variant {
@@ -682,7 +684,8 @@ impl Renderer {
     }
 
     /// Voxelize's work items per thread (at least 1; the adapter's choice until set:
-    /// [`Voxelize::items_per_thread`]). Any value gives the same grid; tests compare them.
+    /// [`Voxelize::items_per_thread`]; kept across [`Renderer::reload`]). Any value gives the
+    /// same grid; tests compare them.
     pub fn set_voxelize_items_per_thread(&mut self, items: u32) {
         self.passes.voxelize.items_per_thread = items.max(1);
     }
