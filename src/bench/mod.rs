@@ -114,9 +114,17 @@ pub struct Point {
     pub shadow_map: u32,
 }
 
+/// The paper's grid (Section 5: 1024x1024 planes x rays, 256 bins): the scaling sweeps' VSV point
+/// and the one the report sets beside the paper's stage timings.
+pub const PAPER_GRID: Grid =
+    Grid { planes: 1024, rays: 1024, bins: 256, spacing: crate::params::BinSpacing::UniformAngle };
+
 impl Point {
     fn grid(method: Method, planes: u32, rays: u32, bins: u32, shadow_map: u32) -> Point {
         Point { method, grid: Grid { planes, rays, bins, ..Grid::default() }, shadow_map }
+    }
+    fn vsv(grid: Grid, shadow_map: u32) -> Point {
+        Point { method: Method::Vsv, grid, shadow_map }
     }
     fn march(steps: u32, shadow_map: u32, jitter: bool) -> Point {
         Point { method: Method::Raymarch { steps, jitter }, grid: Grid::default(), shadow_map }
@@ -144,7 +152,8 @@ impl Point {
 /// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, 256² / 1024² at a few bin
 /// counts, the default grid and twice its planes), the same for the Cartesian grid at fewer
 /// points, and the raymarch at 16 to 1024 steps with a 2048² shadow map plus 512² to 4096² maps at
-/// 256 steps (and a jittered point, and 512 and 1024 steps on the 4096² map). `quick`: two or three tiny points per method. [`run`] extends the
+/// 256 steps (and a jittered point, and 512 and 1024 steps on the 4096² map). `quick`: two or
+/// three tiny points per method. [`run`] extends the
 /// march to 2048 and 4096 steps on the 4096² map while none of these is as accurate as VSV's
 /// default grid.
 pub fn error_sweep(quick: bool) -> Vec<Point> {
@@ -169,9 +178,8 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     }
     // The product's default and twice its planes (half as many rays as planes: Grid::default).
     let g = Grid::default();
-    for planes in [g.planes, 2 * g.planes] {
-        v.push(Point::grid(Vsv, planes, g.rays, g.bins, map));
-    }
+    v.push(Point::vsv(g, map));
+    v.push(Point::vsv(Grid { planes: 2 * g.planes, ..g }, map));
     for (pr, bins) in [(512, 64), (512, 256), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Cartesian, pr, pr, bins, map));
     }
@@ -191,13 +199,13 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
 pub const CHASE_MAP: u32 = 4096;
 pub const CHASE_MAX_STEPS: u32 = 4096;
 
-/// The two settings the scaling sweeps time: the paper's 1024x1024x256 grid and a 256-step march.
+/// The two settings the scaling sweeps time: [`PAPER_GRID`] and a 256-step march.
 pub fn scaling_points(quick: bool) -> [Point; 2] {
     if quick {
         [Point::grid(Method::Vsv, 64, 64, 32, 512), Point::march(32, 256, false)]
     } else {
         [
-            Point::grid(Method::Vsv, 1024, 1024, 256, crate::params::Baseline::default().shadow_map),
+            Point::vsv(PAPER_GRID, crate::params::Baseline::default().shadow_map),
             Point::march(256, crate::params::Baseline::default().shadow_map, false),
         ]
     }
@@ -527,9 +535,7 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     // none, double the most accurate march's steps on the largest map (up to CHASE_MAX_STEPS),
     // as long as that still lowers its error (a map-limited march does not get better).
     if !opts.quick {
-        let g = Grid::default();
-        let default_grid =
-            Point::grid(Method::Vsv, g.planes, g.rays, g.bins, crate::params::Baseline::default().shadow_map);
+        let default_grid = Point::vsv(Grid::default(), crate::params::Baseline::default().shadow_map);
         let target = rows.iter().find(|r| r.point == default_grid).map(|r| r.scatter.rel_rmse);
         let march_best = |rows: &[Row]| {
             rows.iter()

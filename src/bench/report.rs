@@ -1,7 +1,7 @@
 //! The benchmark's files: results.csv, the scaling CSVs, the three plots and report.md.
 
 use super::plot::{self, Plot, Series, COLORS};
-use super::{pareto_front, time_at_error, BenchError, BenchResults, CacheStatus, Row, ScalingRow};
+use super::{pareto_front, time_at_error, BenchError, BenchResults, CacheStatus, Row, ScalingRow, PAPER_GRID};
 use crate::render::Pass;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -515,8 +515,9 @@ pub const PAPER_STAGES_MS: [(Pass, &str, f64, f64); 3] = [
 
 fn paper_section(s: &mut String, r: &BenchResults) {
     let paper_grid = |row: &&Row| {
+        let g = row.point.grid;
         row.point.method_name() == "vsv"
-            && (row.point.grid.planes, row.point.grid.rays, row.point.grid.bins) == (1024, 1024, 256)
+            && (g.planes, g.rays, g.bins) == (PAPER_GRID.planes, PAPER_GRID.rays, PAPER_GRID.bins)
     };
     let Some(row) = r.rows.iter().find(paper_grid) else { return };
     let _ = writeln!(
