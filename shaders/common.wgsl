@@ -15,18 +15,20 @@ const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;
 const INV_4PI: f32 = 0.0795774715459477;
 
-// Specialisation (DESIGN section 6): the light type, the phase function and a grey medium are
-// pipeline-overridable constants, set per pipeline by `src/render/variant.rs` (one pipeline per
-// variant in use), so the branches on them fold away when the pipeline is built instead of running
-// per pixel. The values here are only defaults for validation; every pipeline sets them all.
+// Specialisation (DESIGN section 6): the light type, the phase function, a grey medium and the
+// grid's axes are pipeline-overridable constants, set per pipeline by `src/render/variant.rs` (one
+// pipeline per variant in use), so the branches on them fold away when the pipeline is built
+// instead of running per pixel. (llvmpipe runs both sides of a branch on a buffer value: the
+// Cartesian grid's code, never taken in an epipolar frame, cost Voxelize a third of its time.)
+// The values here are only defaults for validation; every pipeline sets them all.
 override POINT_LIGHT: bool = true; // point light (else directional)
 override PHASE: u32 = 0u;          // Phase::id(): 0 isotropic, 1 HG, 2 Schlick, 3 Cornette-Shanks, 4 Rayleigh
 override GREY_MEDIUM: bool = false; // sigma_t equal in R, G and B: one channel's exponentials
+override CARTESIAN: bool = false;   // the screen-space Cartesian grid (the paper's section 2), else epipolar
+override COSINE_BINS: bool = false; // bins uniform in cos(psi) (point lights only), else uniform in psi / r
 
-// flags
+// flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
-const FLAG_COSINE_BINS: u32 = 4u;  // bins uniform in cos(psi) (else uniform in psi / r)
-const FLAG_CARTESIAN: u32 = 8u;    // screen-space Cartesian grid (the paper's section 2)
 const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
 
 struct Frame {
@@ -116,7 +118,7 @@ fn gamma_of_ray(f: Frame, y: f32) -> f32 {
 // Continuous bin coordinate of z (psi or r).
 fn bin_coord(f: Frame, z: f32) -> f32 {
     let b = f32(f.grid.z);
-    if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
+    if (COSINE_BINS) {
         // (cos z_lo - cos z) / (cos z_lo - cos z_hi) as products of sines: the plain form is 0/0
         // in f32 once the range is below ~3e-4 rad (src/epipolar.rs has the same).
         let lo = f.ranges.z;
@@ -129,7 +131,7 @@ fn bin_coord(f: Frame, z: f32) -> f32 {
 
 fn z_of_bin(f: Frame, k: f32) -> f32 {
     let s = k / f32(f.grid.z);
-    if ((f.image.w & FLAG_COSINE_BINS) != 0u) {
+    if (COSINE_BINS) {
         // cos z = cos z_lo - s (cos z_lo - cos z_hi), solved for sin^2 and cos^2 of z / 2 and put
         // back together with atan2: precise at both ends, where cos is flat (src/epipolar.rs).
         let lo = f.ranges.z;
@@ -168,13 +170,13 @@ fn ray_offset(f: Frame, x: u32, y: u32) -> u32 {
     return (x * f.grid.y + y) * f.grid.w;
 }
 
-fn is_cartesian(f: Frame) -> bool { return (f.image.w & FLAG_CARTESIAN) != 0u; }
+fn is_cartesian() -> bool { return CARTESIAN; }
 
 // Continuous (plane, ray) coordinates of a view direction. Cartesian (the paper's section 2): a
 // directional light along a screen axis; planes are the screen rows (or columns) and rays run
 // across them starting at the screen edge nearest the light, so the scan follows the light.
 fn grid_coords(f: Frame, v: vec3f) -> vec2f {
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         let z = dot(v, f.cam_fwd.xyz);
         let sx = dot(v, f.cam_right.xyz) / z / f.cam_right.w;
         let sy = dot(v, f.cam_up.xyz) / z / f.cam_up.w;
@@ -192,7 +194,7 @@ fn grid_coords(f: Frame, v: vec3f) -> vec2f {
 
 // The view direction at continuous grid coordinates (x, y): the inverse of grid_coords.
 fn cell_dir(f: Frame, x: f32, y: f32) -> vec3f {
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         let u = x / f32(f.grid.x) * 2.0;
         let w = y / f32(f.grid.y) * 2.0;
         var sx = 0.0;

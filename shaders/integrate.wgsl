@@ -272,7 +272,7 @@ fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
 // z_scale: z = t z_scale for a directional light (sin gamma, or the Cartesian grid's depth scale).
 fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32) -> f32 {
     var across = t_s * sin(gamma) * f.b2.w / f32(f.grid.x);
-    if (is_cartesian(f)) { across = t_s * 2.0 * max(f.cam_right.w, f.cam_up.w) / f32(f.grid.x); }
+    if (is_cartesian()) { across = t_s * 2.0 * max(f.cam_right.w, f.cam_up.w) / f32(f.grid.x); }
     // At grazing views the tangent plane stops standing for the surface (a curved one bends away
     // from it): the layer is at most 8 cells long on the view ray.
     let t = max(t_s - across / max(back, 0.125), 0.0);
@@ -362,7 +362,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         if (t_s >= 0.0) { t_end = min(t_end, t_s); }
         if (t_end > span.x) {
             var z_scale = sin(gamma);
-            if (is_cartesian(f)) { z_scale = dot(v, f.cam_fwd.xyz); }
+            if (is_cartesian()) { z_scale = dot(v, f.cam_fwd.xyz); }
             build_pieces(v, span.x, t_end);
             let z_start = span.x * z_scale;
             var z_end = t_end * z_scale;

@@ -23,7 +23,7 @@ var<private> f: Frame;
 fn visible_z(p: vec2u) -> f32 {
     let v = pixel_dir(f, vec2f(p));
     let t_s = textureLoad(distance, vec2i(p), 0).x;
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
         var t = span.y;
         if (t_s >= 0.0) { t = min(t, t_s); }

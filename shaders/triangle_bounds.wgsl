@@ -110,7 +110,7 @@ fn triangle_rects(tri: u32) -> Rects {
     let p2 = tris[3u * tri + 2u].xyz;
     let e = f.eye.xyz;
     let a = f.axis.xyz;
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         o.a = cartesian_rect(p0, p1, p2);
         return o;
     }
@@ -197,7 +197,7 @@ fn triangle_z_range(tri: u32) -> vec2f {
     let p1 = tris[3u * tri + 1u].xyz;
     let p2 = tris[3u * tri + 2u].xyz;
     let e = f.eye.xyz;
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         let fw = f.cam_fwd.xyz;
         let z = vec3f(dot(p0 - e, fw), dot(p1 - e, fw), dot(p2 - e, fw));
         return vec2f(min(z.x, min(z.y, z.z)), max(z.x, max(z.y, z.z)));

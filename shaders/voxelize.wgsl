@@ -205,7 +205,7 @@ fn voxelize_item(rec: vec4u, within: u32, p: array<vec3f, 3>) {
     run_mask = 0u;
     let offset = bin_offset(x);
 
-    if (is_cartesian(f)) {
+    if (is_cartesian()) {
         // The plane of grid row (or column) x: through the eye and two of its view directions;
         // the light rays in it are lines of constant view depth.
         let n = cross(cell_dir(f, f32(x) + 0.5, 0.0), cell_dir(f, f32(x) + 0.5, f32(f.grid.y)));

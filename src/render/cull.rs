@@ -110,7 +110,7 @@ impl Cull {
                 module,
                 &layout,
                 ["cull", "cull_finish", "offsets_local", "offsets_blocks"],
-                Specialised::Light,
+                Specialised::LightAndGrid,
             ),
             layout,
             bind_groups: Vec::new(),

@@ -6,10 +6,9 @@ use crate::scene::{Aabb, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
 
-// Bit 1 was the point-light flag: the light type is now a pipeline constant (`render::Variant`).
+// Bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: they are pipeline
+// constants now (`render::Variant`), so no shader branches on them at run time.
 pub const FLAG_PHI_WRAPS: u32 = 2;
-pub const FLAG_COSINE_BINS: u32 = 4;
-pub const FLAG_CARTESIAN: u32 = 8;
 /// Nothing scatters (no medium or a dark light): Integrate writes zeros and the voxel passes are skipped.
 pub const FLAG_NO_SCATTER: u32 = 16;
 
@@ -99,6 +98,15 @@ pub const TABLE_ROWS: u32 = 256;
 pub const TABLE_COLS: u32 = 512;
 
 impl FrameSetup {
+    /// The shader variant this frame's passes run as: its light, `phase`, medium and grid axes
+    /// (cosine bins only where the method has bins).
+    pub fn variant(&self, phase: &crate::params::Phase) -> super::Variant {
+        let cosine =
+            self.mapping.spacing == BinSpacing::UniformCosine && !matches!(self.method, Method::Raymarch { .. });
+        super::Variant::new(self.frame.is_point(), phase, self.uniforms.sigma_t.truncate().to_array())
+            .with_grid(self.method == Method::Cartesian, cosine)
+    }
+
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {
         Self::with_pruning(scene, width, height, method, true)
     }
@@ -169,12 +177,6 @@ impl FrameSetup {
         let mut flags = 0;
         if mapping.phi_wraps {
             flags |= FLAG_PHI_WRAPS;
-        }
-        if mapping.spacing == BinSpacing::UniformCosine {
-            flags |= FLAG_COSINE_BINS;
-        }
-        if method == Method::Cartesian {
-            flags |= FLAG_CARTESIAN;
         }
         if !scene.needs_scattering() {
             flags |= FLAG_NO_SCATTER;

@@ -35,8 +35,7 @@ impl Integrate {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Integrate, GpuError> {
         let module = lib.module(device, "integrate.wgsl")?;
         let layout = IntegrateBindings::layout(device, "Integrate::layout", wgpu::ShaderStages::COMPUTE);
-        let pipelines =
-            SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::LightPhaseAndMedium);
+        let pipelines = SpecialisedCompute::new(device, "Integrate", module, &layout, ["main"], Specialised::All);
         Ok(Integrate { pipelines, layout, bind_group: None })
     }
 

@@ -533,8 +533,7 @@ impl Renderer {
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
         setup.uniforms.table.w = self.passes.voxelize.items_per_thread;
-        let variant =
-            Variant::new(setup.frame.is_point(), &scene.medium.phase, setup.uniforms.sigma_t.truncate().to_array());
+        let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
         if self.variant != Some(variant) {
@@ -562,7 +561,7 @@ impl Renderer {
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
         let setup = self.prepare(scene, width, height, method)?;
-        let v = Variant::new(setup.frame.is_point(), &scene.medium.phase, setup.uniforms.sigma_t.truncate().to_array());
+        let v = setup.variant(&scene.medium.phase);
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
         };

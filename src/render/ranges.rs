@@ -39,7 +39,7 @@ impl Ranges {
                 module,
                 &layout,
                 ["reduce", "finish"],
-                Specialised::Light,
+                Specialised::LightAndGrid,
             ),
             layout,
             bind_group: None,

@@ -1,10 +1,13 @@
 //! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type, the
-//! phase function or whether the medium is grey builds one pipeline per combination a frame actually
-//! uses, with the WGSL pipeline-overridable constants `POINT_LIGHT`, `PHASE` and `GREY_MEDIUM`
-//! (`shaders/common.wgsl`) set. The shader compiler then folds the branches on them away when it
-//! builds the pipeline, instead of every pixel taking them at run time. (On llvmpipe a branch on a
-//! value read from a buffer runs both sides for every pixel: a grey-medium test made at run time
-//! saved nothing, the same test as a constant a third of Integrate on the classroom.)
+//! phase function, whether the medium is grey or the grid's axes builds one pipeline per
+//! combination a frame actually uses, with the WGSL pipeline-overridable constants `POINT_LIGHT`,
+//! `PHASE`, `GREY_MEDIUM`, `CARTESIAN` and `COSINE_BINS` (`shaders/common.wgsl`) set. The shader
+//! compiler then folds the branches on them away when it builds the pipeline, instead of every
+//! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
+//! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
+//! constant a third of Integrate on the classroom; the Cartesian grid's and the cosine bins'
+//! branches, never taken in an epipolar frame of a sun, cost Voxelize half and Integrate a quarter
+//! of their time.)
 //!
 //! Pipelines are built on first use ([`VariantPipelines::prepare`], called by
 //! `Renderer::render_frame` before it records) and kept, so switching the phase function in the
@@ -23,23 +26,47 @@ pub struct Variant {
     /// The medium's extinction is the same in R, G and B: transmittances take one channel's
     /// exponential.
     pub grey: bool,
+    /// The grid is the paper's screen-space Cartesian one ([`super::Method::Cartesian`]).
+    pub cartesian: bool,
+    /// The bins are uniform in `cos psi` ([`crate::params::BinSpacing::UniformCosine`], point
+    /// lights only), else uniform in `psi` or distance.
+    pub cosine_bins: bool,
 }
 
 impl Variant {
-    /// `sigma_t`: the medium's extinction per channel, as the shaders get it.
+    /// `sigma_t`: the medium's extinction per channel, as the shaders get it. An epipolar grid with
+    /// bins uniform in angle or distance; see [`Variant::with_grid`].
     pub fn new(point_light: bool, phase: &Phase, sigma_t: [f32; 3]) -> Variant {
         let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
-        Variant { point_light, phase: phase.id(), grey }
+        Variant { point_light, phase: phase.id(), grey, cartesian: false, cosine_bins: false }
+    }
+
+    /// The same variant for a grid of the given axes.
+    pub fn with_grid(self, cartesian: bool, cosine_bins: bool) -> Variant {
+        Variant { cartesian, cosine_bins, ..self }
     }
 
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 3] {
+    pub fn constants(&self) -> [(&'static str, f64); 5] {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
-            ("POINT_LIGHT", if self.point_light { 1.0 } else { 0.0 }),
+            ("POINT_LIGHT", b(self.point_light)),
             ("PHASE", self.phase as f64),
-            ("GREY_MEDIUM", if self.grey { 1.0 } else { 0.0 }),
+            ("GREY_MEDIUM", b(self.grey)),
+            ("CARTESIAN", b(self.cartesian)),
+            ("COSINE_BINS", b(self.cosine_bins)),
         ]
+    }
+
+    /// `, cartesian grid` or `, cosine bins`, empty for an epipolar grid with bins uniform in angle
+    /// or distance.
+    fn grid_name(&self) -> &'static str {
+        match (self.cartesian, self.cosine_bins) {
+            (true, _) => ", cartesian grid",
+            (false, true) => ", cosine bins",
+            (false, false) => "",
+        }
     }
 
     /// The phase function's file name (`henyey-greenstein`).
@@ -53,19 +80,24 @@ impl fmt::Display for Variant {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let light = if self.point_light { "point light" } else { "directional light" };
         let grey = if self.grey { ", grey medium" } else { "" };
-        write!(f, "{light}, {}{grey}", self.phase_name())
+        write!(f, "{light}, {}{grey}{}", self.phase_name(), self.grid_name())
     }
 }
 
 /// Which of a [`Variant`]'s parts a pass's shader reads: passes that never evaluate the phase
-/// function share one pipeline across all of them.
+/// function share one pipeline across all of them, and passes that never read the grid's axes one
+/// across grids.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Specialised {
     Light,
     LightAndPhase,
     /// The light, the phase and whether the medium is grey (the passes that evaluate
-    /// transmittance per sample: Integrate and the ray march).
+    /// transmittance per sample: the ray march).
     LightPhaseAndMedium,
+    /// The light and the grid's axes (the voxel passes: Ranges, Cull, Voxelize).
+    LightAndGrid,
+    /// Everything: Integrate.
+    All,
 }
 
 /// A pass's pipelines (or groups of pipelines, `P`), one per variant in use.
@@ -81,10 +113,13 @@ impl<P> VariantPipelines<P> {
 
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
+        let epipolar = Variant { cartesian: false, cosine_bins: false, ..v };
         match self.reads {
-            Specialised::Light => Variant { phase: 0, grey: false, ..v },
-            Specialised::LightAndPhase => Variant { grey: false, ..v },
-            Specialised::LightPhaseAndMedium => v,
+            Specialised::Light => Variant { phase: 0, grey: false, ..epipolar },
+            Specialised::LightAndPhase => Variant { grey: false, ..epipolar },
+            Specialised::LightPhaseAndMedium => epipolar,
+            Specialised::LightAndGrid => Variant { phase: 0, grey: false, ..v },
+            Specialised::All => v,
         }
     }
 
@@ -93,10 +128,13 @@ impl<P> VariantPipelines<P> {
     pub fn prepare(&mut self, v: Variant, build: impl FnOnce(&[(&str, f64)], &str) -> P) {
         let key = self.key(v);
         if self.get(v).is_none() {
+            let light = if key.point_light { "point light" } else { "directional light" };
             let label = match self.reads {
-                Specialised::Light if key.point_light => "[point light]".to_string(),
-                Specialised::Light => "[directional light]".to_string(),
-                Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
+                Specialised::Light => format!("[{light}]"),
+                Specialised::LightAndGrid => format!("[{light}{}]", key.grid_name()),
+                Specialised::LightAndPhase | Specialised::LightPhaseAndMedium | Specialised::All => {
+                    format!("[{key}]")
+                }
             };
             let p = build(&key.constants(), &label);
             self.built.push((key, p));
@@ -198,8 +236,10 @@ mod tests {
                     .unwrap_or_else(|e| panic!("{file}: {e}"));
             for (point_light, sigma_t) in [(true, [0.1, 0.1, 0.1]), (false, [0.1, 0.1, 0.1]), (false, [0.1, 0.2, 0.3])]
             {
-                for phase in &phases {
-                    let v = Variant::new(point_light, phase, sigma_t);
+                for (phase, (cartesian, cosine_bins)) in
+                    phases.iter().flat_map(|p| [(false, false), (false, true), (true, false)].map(|g| (p, g)))
+                {
+                    let v = Variant::new(point_light, phase, sigma_t).with_grid(cartesian, cosine_bins);
                     let constants: naga::back::PipelineConstants =
                         v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
                     for ep in &module.entry_points {
@@ -229,10 +269,13 @@ mod tests {
             assert!(!code.contains("FLAG_POINT"), "{file} reads the light type from the uniforms");
             assert!(!code.contains("light.w"), "{file} tells the light type by the light vector's w");
             assert!(!code.contains("params.z"), "{file} tells the light type by the shadow lookup's params.z");
+            assert!(!code.contains("FLAG_CARTESIAN"), "{file} reads the grid's kind from the uniforms");
+            assert!(!code.contains("FLAG_COSINE_BINS"), "{file} reads the bin spacing from the uniforms");
         }
         let common = crate::gpu::EMBEDDED.iter().find(|(f, _)| *f == "common.wgsl").map(|(_, s)| *s).unwrap_or("");
         assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
         assert!(common.contains("override GREY_MEDIUM"));
+        assert!(common.contains("override CARTESIAN") && common.contains("override COSINE_BINS"));
     }
 
     #[test]
@@ -264,6 +307,35 @@ mod tests {
         });
         m.prepare(Variant::new(false, &Phase::Rayleigh, COLOURED), |c, _| assert_eq!(c[2], ("GREY_MEDIUM", 0.0)));
         assert_eq!(m.variants().count(), 2);
+    }
+
+    /// Only the passes that read the grid's axes build a pipeline per grid; the others (the shadow
+    /// map, the surfaces, the ray march) share theirs between a Cartesian, a cosine-binned and a
+    /// plain epipolar frame.
+    #[test]
+    fn only_grid_passes_specialise_to_the_grid() {
+        let sun = Variant::new(false, &Phase::Isotropic, GREY);
+        let grids = [sun, sun.with_grid(true, false), sun.with_grid(false, true)];
+        let mut shared = VariantPipelines::new(Specialised::LightPhaseAndMedium);
+        let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
+        let mut integrate = VariantPipelines::new(Specialised::All);
+        for v in grids {
+            shared.prepare(v, |c, _| assert_eq!(&c[3..], &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0)]));
+            voxels.prepare(v, |c, _| {
+                assert_eq!(c[3], ("CARTESIAN", if v.cartesian { 1.0 } else { 0.0 }));
+                assert_eq!(c[4], ("COSINE_BINS", if v.cosine_bins { 1.0 } else { 0.0 }));
+            });
+            integrate.prepare(v, |_, _| {});
+        }
+        assert_eq!(shared.variants().count(), 1);
+        assert_eq!(voxels.variants().count(), 3);
+        assert_eq!(integrate.variants().count(), 3);
+        let mut labels = Vec::new();
+        voxels.prepare(Variant::new(true, &Phase::Rayleigh, GREY).with_grid(false, true), |_, l| {
+            labels.push(l.to_string())
+        });
+        assert_eq!(labels, ["[point light, cosine bins]"]);
+        assert_eq!(sun.with_grid(true, false).to_string(), "directional light, isotropic, grey medium, cartesian grid");
     }
 
     const GREY: [f32; 3] = [0.09, 0.09, 0.09];

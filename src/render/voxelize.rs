@@ -49,7 +49,14 @@ impl Voxelize {
         let layout = VoxelizeBindings::layout(device, "Voxelize::layout", wgpu::ShaderStages::COMPUTE);
         Ok(Voxelize {
             items_per_thread: if adapter == wgpu::DeviceType::Cpu { 16 } else { 1 },
-            pipelines: SpecialisedCompute::new(device, "Voxelize", module, &layout, ["main"], Specialised::Light),
+            pipelines: SpecialisedCompute::new(
+                device,
+                "Voxelize",
+                module,
+                &layout,
+                ["main"],
+                Specialised::LightAndGrid,
+            ),
             layout,
             bind_groups: Vec::new(),
         })
