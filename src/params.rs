@@ -600,7 +600,7 @@ impl ReferenceQuality {
     };
 }
 
-/// How `epivox bench` measures (`--frames`, `--warmup`).
+/// How `epivox bench` measures (`--frames`, `--warmup`, `--rounds`).
 pub struct Measure;
 
 impl Measure {
@@ -617,6 +617,15 @@ impl Measure {
         min: 0.0,
         max: 1000.0,
         doc: "Frames rendered before timing (pipeline compilation, caches).",
+    };
+    pub const ROUNDS: Spec = Spec {
+        name: "rounds",
+        unit: "rounds",
+        min: 1.0,
+        max: 100.0,
+        doc: "Times the error sweep is timed, interleaved: each round times every point once (after \
+              its warm-up), so a slow phase of a shared machine falls on all points alike; a point's \
+              time is the median of its frames from all rounds.",
     };
 }
 

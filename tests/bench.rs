@@ -90,6 +90,30 @@ fn quick_bench_writes_every_file_with_rows_for_every_method() {
     assert!(report.contains("| cartesian |") && report.contains("| raymarch |") && report.contains("| vsv |"));
 }
 
+/// With `rounds = 3` every point of the error sweep is timed three times, interleaved: its time is
+/// the median of three times as many frames, its image and error those of the first round, and
+/// the report says how it was timed.
+#[test]
+fn rounds_pool_every_points_frames() {
+    let Some(mut r) = renderer() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = BenchOptions::new(dir.path(), true);
+    (opts.width, opts.height, opts.scaling, opts.frames) = (32, 32, false, 2);
+    let scene = axis_aligned_scene();
+    let once = bench::run(&mut r, &scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    opts.rounds = 3;
+    let res = bench::run(&mut r, &scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(res.rows.len(), once.rows.len());
+    for (a, b) in once.rows.iter().zip(&res.rows) {
+        assert_eq!(a.point, b.point);
+        assert_eq!((a.timing.frames, b.timing.frames), (2, 6), "{:?}", b.point);
+        assert_eq!(a.scatter.rel_rmse, b.scatter.rel_rmse, "the error comes from the same render");
+        assert!(b.timing.total_ms.is_finite());
+    }
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(report.contains("pooled over 3 interleaved rounds"), "{report}");
+}
+
 /// The reference is rendered once; it is found again when nothing changed (also when only the grid
 /// changed, which the reference does not use) and rendered anew when the geometry, the camera, the
 /// light or the medium changed.

@@ -71,6 +71,10 @@ pub struct BenchOptions {
     pub warmup: usize,
     /// Frames measured per point; the report gives their median.
     pub frames: usize,
+    /// Rounds of the error sweep ([`crate::params::Measure::ROUNDS`]): every point is timed once
+    /// per round, so a phase of a shared machine that slows it down falls on all points alike
+    /// instead of on the few measured during it. 1: each point is timed once, in sweep order.
+    pub rounds: usize,
     /// Where results.csv, report.md and the plots go.
     pub out_dir: PathBuf,
     /// Where reference images are cached.
@@ -94,6 +98,7 @@ impl BenchOptions {
             quick,
             warmup: 1,
             frames: if quick { 3 } else { 5 },
+            rounds: 1,
             cache_dir: out_dir.join("cache"),
             out_dir,
             progress: false,
@@ -277,6 +282,8 @@ pub struct BenchResults {
     pub adapter: String,
     /// "GPU timestamps" or, on an adapter without them, "wall clock (includes read-back)".
     pub timing_source: &'static str,
+    /// Rounds the error sweep was timed in ([`BenchOptions::rounds`]).
+    pub rounds: usize,
     pub reference_key: String,
     pub reference_status: CacheStatus,
     pub reference_path: PathBuf,
@@ -290,6 +297,70 @@ pub struct BenchResults {
     pub seconds: f64,
 }
 
+/// The measured frames of one point: per frame its passes' GPU times and its wall-clock time.
+#[derive(Debug, Clone, Default)]
+struct Frames {
+    passes: Vec<Vec<(Pass, f64)>>,
+    wall: Vec<f64>,
+}
+
+impl Frames {
+    /// Medians over the frames: GPU timestamps where the adapter has them, else wall clock.
+    fn timing(&self, timestamps: bool) -> Timing {
+        let frames = self.wall.len();
+        if !timestamps {
+            return Timing { total_ms: median(self.wall.clone()), volume_ms: f64::NAN, passes: Vec::new(), frames };
+        }
+        let per_frame = &self.passes;
+        let total = median(per_frame.iter().map(|f| f.iter().map(|p| p.1).sum()).collect());
+        let volume = median(
+            per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
+        );
+        let passes = per_frame
+            .first()
+            .map(|first| {
+                first
+                    .iter()
+                    .map(|&(pass, _)| {
+                        let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == pass).map(|p| p.1)).collect();
+                        (pass, median(v))
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        Timing { total_ms: total, volume_ms: volume, passes, frames }
+    }
+}
+
+/// Renders `warmup + frames` frames of `point` and returns the timed frames and the last one.
+fn measure_frames(
+    r: &mut Renderer,
+    scene: &mut Scene,
+    width: u32,
+    height: u32,
+    point: &Point,
+    warmup: usize,
+    frames: usize,
+) -> Result<(Frames, crate::render::RenderOutput), RenderError> {
+    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
+    scene.grid = point.grid;
+    for _ in 0..warmup {
+        r.render(scene, width, height, point.method)?;
+    }
+    let frames = frames.max(1);
+    let mut timed = Frames { passes: Vec::with_capacity(frames), wall: Vec::with_capacity(frames) };
+    let mut last = None;
+    for _ in 0..frames {
+        let started = Instant::now();
+        let out = r.render(scene, width, height, point.method)?;
+        timed.wall.push(started.elapsed().as_secs_f64() * 1e3);
+        timed.passes.push(out.timings.iter().map(|t| (t.pass, t.ms)).collect());
+        last = Some(out);
+    }
+    let Some(last) = last else { unreachable!("frames >= 1") };
+    Ok((timed, last))
+}
+
 /// Renders `warmup + frames` frames of `point` and returns the medians and the last frame.
 fn measure(
     r: &mut Renderer,
@@ -300,39 +371,8 @@ fn measure(
     warmup: usize,
     frames: usize,
 ) -> Result<(Timing, crate::render::RenderOutput), RenderError> {
-    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
-    scene.grid = point.grid;
-    for _ in 0..warmup {
-        r.render(scene, width, height, point.method)?;
-    }
-    let frames = frames.max(1);
-    let mut per_frame: Vec<Vec<(Pass, f64)>> = Vec::with_capacity(frames);
-    let mut wall: Vec<f64> = Vec::with_capacity(frames);
-    let mut last = None;
-    for _ in 0..frames {
-        let started = Instant::now();
-        let out = r.render(scene, width, height, point.method)?;
-        wall.push(started.elapsed().as_secs_f64() * 1e3);
-        per_frame.push(out.timings.iter().map(|t| (t.pass, t.ms)).collect());
-        last = Some(out);
-    }
-    let Some(last) = last else { unreachable!("frames >= 1") };
-    if !r.ctx.timestamps {
-        let total = median(wall);
-        return Ok((Timing { total_ms: total, volume_ms: f64::NAN, passes: Vec::new(), frames }, last));
-    }
-    let total = median(per_frame.iter().map(|f| f.iter().map(|p| p.1).sum()).collect());
-    let volume = median(
-        per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
-    );
-    let passes = per_frame[0]
-        .iter()
-        .map(|&(pass, _)| {
-            let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == pass).map(|p| p.1)).collect();
-            (pass, median(v))
-        })
-        .collect();
-    Ok((Timing { total_ms: total, volume_ms: volume, passes, frames }, last))
+    let (timed, last) = measure_frames(r, scene, width, height, point, warmup, frames)?;
+    Ok((timed.timing(r.ctx.timestamps), last))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -499,37 +539,46 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
 
     let mut work = scene.clone();
     let mut rows: Vec<Row> = Vec::new();
+    // Each row's timed frames, pooled over the rounds.
+    let mut timed: Vec<Frames> = Vec::new();
     // The most accurate scattered-light image of each method, for a look beside the reference.
     let mut best: Vec<(&'static str, f64, crate::image::Image)> = Vec::new();
     let mut first_failure = None;
     let chase_map = CHASE_MAP.min(renderer.ctx.device.limits().max_texture_dimension_2d);
-    let mut measure_point =
-        |p: &Point, frames: usize, rows: &mut Vec<Row>, notes: &mut Vec<String>| -> Result<(), BenchError> {
-            bar.set_message(format!("{} {}", p.method_name(), p.setting()));
-            match measure(renderer, &mut work, w, h, p, opts.warmup, frames) {
-                Ok((timing, o)) => {
-                    let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
-                    let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
-                    let name = p.method_name();
-                    match best.iter_mut().find(|b| b.0 == name) {
-                        Some(b) if scatter.rel_rmse < b.1 => *b = (name, scatter.rel_rmse, o.scatter),
-                        Some(_) => {}
-                        None => best.push((name, scatter.rel_rmse, o.scatter)),
-                    }
-                    rows.push(Row { point: *p, timing, scatter, hdr });
+    let timestamps = renderer.ctx.timestamps;
+    let mut measure_point = |p: &Point,
+                             frames: usize,
+                             rows: &mut Vec<Row>,
+                             timed: &mut Vec<Frames>,
+                             notes: &mut Vec<String>|
+     -> Result<(), BenchError> {
+        bar.set_message(format!("{} {}", p.method_name(), p.setting()));
+        match measure_frames(renderer, &mut work, w, h, p, opts.warmup, frames) {
+            Ok((frames, o)) => {
+                let timing = frames.timing(timestamps);
+                timed.push(frames);
+                let scatter = metrics::compare(&o.scatter, &reference.scatter)?;
+                let hdr = metrics::compare(&o.hdr, &reference.hdr)?;
+                let name = p.method_name();
+                match best.iter_mut().find(|b| b.0 == name) {
+                    Some(b) if scatter.rel_rmse < b.1 => *b = (name, scatter.rel_rmse, o.scatter),
+                    Some(_) => {}
+                    None => best.push((name, scatter.rel_rmse, o.scatter)),
                 }
-                Err(e) => {
-                    let msg = format!("{} {}: skipped, it failed: {e}", p.method_name(), p.setting());
-                    bar.println(&msg);
-                    first_failure.get_or_insert_with(|| msg.clone());
-                    notes.push(msg);
-                }
+                rows.push(Row { point: *p, timing, scatter, hdr });
             }
-            bar.inc(1);
-            Ok(())
-        };
+            Err(e) => {
+                let msg = format!("{} {}: skipped, it failed: {e}", p.method_name(), p.setting());
+                bar.println(&msg);
+                first_failure.get_or_insert_with(|| msg.clone());
+                notes.push(msg);
+            }
+        }
+        bar.inc(1);
+        Ok(())
+    };
     for p in &points {
-        measure_point(p, opts.frames, &mut rows, &mut notes)?;
+        measure_point(p, opts.frames, &mut rows, &mut timed, &mut notes)?;
     }
     // Equal error needs a baseline point as accurate as VSV's default grid: while the sweep has
     // none, double the most accurate march's steps on the largest map (up to CHASE_MAX_STEPS),
@@ -552,11 +601,33 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
             }
             bar.inc_length(1);
             // These take seconds a frame: three are enough for a median.
-            measure_point(&Point::march(steps * 2, chase_map, false), opts.frames.min(3), &mut rows, &mut notes)?;
+            let p = Point::march(steps * 2, chase_map, false);
+            measure_point(&p, opts.frames.min(3), &mut rows, &mut timed, &mut notes)?;
             match march_best(&rows) {
                 Some((_, e)) if e < 0.98 * err => {}
                 _ => break,
             }
+        }
+    }
+    // Further rounds time every point again, in the same order and with as many frames, so that a
+    // slow phase of a shared machine falls on all of them alike; a point's time is the median of
+    // its frames from all rounds (its image and error are those of the first).
+    let per_round: Vec<usize> = timed.iter().map(|f| f.wall.len()).collect();
+    for round in 2..=opts.rounds {
+        bar.inc_length(rows.len() as u64);
+        for ((row, pooled), &frames) in rows.iter_mut().zip(timed.iter_mut()).zip(&per_round) {
+            let (name, setting) = (row.point.method_name(), row.point.setting());
+            bar.set_message(format!("round {round} of {}: {name} {setting}", opts.rounds));
+            match measure_frames(renderer, &mut work, w, h, &row.point, opts.warmup, frames) {
+                Ok((more, _)) => {
+                    pooled.passes.extend(more.passes);
+                    pooled.wall.extend(more.wall);
+                    row.timing = pooled.timing(timestamps);
+                }
+                Err(e) => notes
+                    .push(format!("{name} {setting}: round {round} failed, its time is from the rounds before: {e}")),
+            }
+            bar.inc(1);
         }
     }
     if rows.is_empty() {
@@ -622,6 +693,7 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         height: h,
         adapter: renderer.ctx.adapter_name(),
         timing_source,
+        rounds: opts.rounds.max(1),
         reference_key: reference.key.clone(),
         reference_status: reference.status,
         reference_path: reference.path.clone(),

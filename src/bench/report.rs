@@ -319,7 +319,15 @@ pub fn markdown(r: &BenchResults) -> String {
     let _ = writeln!(s, "| light | {} |", r.light);
     let _ = writeln!(s, "| medium | {} |", r.medium);
     let _ = writeln!(s, "| image | {}x{} |", r.width, r.height);
-    let _ = writeln!(s, "| timing | {}; per point the median of the measured frames after warm-up |", r.timing_source);
+    let rounds = match r.rounds {
+        1 => String::new(),
+        n => format!(", pooled over {n} interleaved rounds of the error sweep"),
+    };
+    let _ = writeln!(
+        s,
+        "| timing | {}; per point the median of the measured frames after warm-up{rounds} |",
+        r.timing_source
+    );
     let reference = match r.reference_status {
         CacheStatus::Hit => "read from the cache".to_string(),
         CacheStatus::Rendered { seconds } => format!("rendered in {seconds:.1} s and cached"),

@@ -32,6 +32,13 @@ pub struct BenchArgs {
           help = super::spec_help("Frames rendered before measuring (pipeline compilation, caches) [default: 1]",
                                   &Measure::WARMUP))]
     pub warmup: Option<u32>,
+    #[arg(long, value_parser = |s: &str| super::parse_count::<u32>(&Measure::ROUNDS, s),
+          help = super::spec_help(
+              "Times the error sweep is timed, interleaved: a slow phase of a shared machine then \
+               falls on every point alike [default: 1]",
+              &Measure::ROUNDS,
+          ))]
+    pub rounds: Option<u32>,
     /// Where reference images are cached [default: OUT/cache].
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
@@ -64,6 +71,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     }
     if let Some(w) = args.warmup {
         opts.warmup = w as usize;
+    }
+    if let Some(r) = args.rounds {
+        opts.rounds = r as usize;
     }
     if let Some(c) = &args.cache_dir {
         opts.cache_dir = c.clone();
