@@ -361,20 +361,6 @@ fn measure_frames(
     Ok((timed, last))
 }
 
-/// Renders `warmup + frames` frames of `point` and returns the medians and the last frame.
-fn measure(
-    r: &mut Renderer,
-    scene: &mut Scene,
-    width: u32,
-    height: u32,
-    point: &Point,
-    warmup: usize,
-    frames: usize,
-) -> Result<(Timing, crate::render::RenderOutput), RenderError> {
-    let (timed, last) = measure_frames(r, scene, width, height, point, warmup, frames)?;
-    Ok((timed.timing(r.ctx.timestamps), last))
-}
-
 fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
@@ -642,8 +628,9 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         for p in &scaling {
             bar.set_message(format!("{} {} at {}x{}, {tri} triangles", p.method_name(), p.setting(), size.0, size.1));
             // Median of 3 after one warm-up: these points only time, and the largest take long.
-            match measure(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
-                Ok((timing, _)) => {
+            match measure_frames(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
+                Ok((frames, _)) => {
+                    let timing = frames.timing(timestamps);
                     sink.push(ScalingRow { point: *p, triangles: tri, width: size.0, height: size.1, timing })
                 }
                 Err(e) => notes.push(format!(

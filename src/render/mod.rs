@@ -518,8 +518,15 @@ impl Renderer {
     }
 
     /// Everything a frame needs before its passes are recorded: resources, pipelines of the variant,
-    /// bind groups and this frame's uniforms.
-    fn prepare(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, RenderError> {
+    /// bind groups and this frame's uniforms. Returns the frame's setup and the variant its passes
+    /// run as.
+    fn prepare(
+        &mut self,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        method: Method,
+    ) -> Result<(FrameSetup, Variant), RenderError> {
         self.ensure_geometry(scene)?;
         self.ensure_targets(width, height)?;
         self.ensure_grid(scene.grid)?;
@@ -547,7 +554,7 @@ impl Renderer {
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
-        Ok(setup)
+        Ok((setup, variant))
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets
@@ -560,8 +567,7 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
-        let setup = self.prepare(scene, width, height, method)?;
-        let v = setup.variant(&scene.medium.phase);
+        let (setup, v) = self.prepare(scene, width, height, method)?;
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
         };
