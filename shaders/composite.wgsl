@@ -1,19 +1,78 @@
-// composite.wgsl: the final linear radiance of each pixel.
+// composite.wgsl: lights the surfaces and gives the final linear radiance of each pixel.
 //
 //   L_pixel = L_surface * T_view + L_scatter
 //   T_view = exp(-sigma_t * t_s)            (point light: the medium is unbounded)
 //          = exp(-sigma_t * |[0, t_s] ∩ box|) (directional light: the medium fills the box)
+//   L_surface = albedo / pi * max(cos theta_i, 0) * V_shadow_map * E_in   (n faces the eye: an
+//   opaque sheet lit from behind stays dark in front)
+//   point:        E_in = I0 * exp(-sigma_t d) / (d^2 + r^2)
+//   directional:  E_in = E0 * exp(-sigma_t l(P)),  l = path toward the light inside the medium box
+//
+// Deferred: Surface wrote the albedo, cos theta_i and t of the nearest surface (surface.wgsl);
+// the point is P = eye + t v on the pixel's own view ray, so each pixel is lit once, not every
+// fragment the rasterizer shaded.
 
 #import common
+#import shadow_lookup
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
-@group(0) @binding(1) var surface: texture_2d<f32>;
-@group(0) @binding(2) var distance: texture_2d<f32>;
-@group(0) @binding(3) var scatter: texture_2d<f32>;
-@group(0) @binding(4) var hdr: texture_storage_2d<rgba32float, write>;
+// Read in place, not copied like `f`: one pixel indexes the six matrices once, too few lookups to
+// amortise a private copy (common.wgsl, "Parameters").
+@group(0) @binding(1) var<storage, read> shadow: ShadowFaces;
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(3) var material: texture_2d<f32>;
+@group(0) @binding(4) var distance: texture_2d<f32>;
+@group(0) @binding(5) var scatter: texture_2d<f32>;
+@group(0) @binding(6) var hdr: texture_storage_2d<rgba32float, write>;
 
-// Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
+// Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
+
+// Fraction of a 2x2 texel neighbourhood that sees the light.
+fn visibility(p: vec3f, bias: f32) -> f32 {
+    let s = shadow_coords(p);
+    if (!s.inside) { return 1.0; }
+    let uv = s.uv - 0.5;
+    let base = floor(uv);
+    let fr = uv - base;
+    var lit = vec4f(0.0);
+    for (var k = 0; k < 4; k++) {
+        let o = vec2f(f32(k & 1), f32(k >> 1));
+        lit[k] = select(0.0, 1.0, s.value <= shadow_stored(s, base + o) + bias);
+    }
+    return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
+}
+
+// Depth bias against shadow acne: a texel of the map covers texel / cos of the surface along the
+// light's direction, so the bias grows with the slope (capped where the surface grazes the light).
+fn slope_bias(texel: f32, cos_i: f32) -> f32 {
+    let c = max(cos_i, 1e-3);
+    let tan_i = sqrt(max(1.0 - c * c, 0.0)) / c;
+    return texel * (1.5 + 1.5 * min(tan_i, 8.0));
+}
+
+// Direct light leaving the surface point p toward the eye (before the view path's attenuation).
+fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32) -> vec3f {
+    // Lit from behind (or edge-on): dark in front. The shadow lookups are skipped too.
+    if (cos_i <= 0.0) { return vec3f(0.0); }
+    let sigma_t = f.sigma_t.xyz;
+    if (is_point_light()) {
+        let dist = length(f.light.xyz - p);
+        let r = f.light_power.w;
+        let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
+        let vis = visibility(p, slope_bias(shadow.params.y * dist, cos_i));
+        return albedo / PI * cos_i * e_in * vis;
+    }
+    var l = 0.0;
+    let lo = f.medium_min.xyz;
+    let hi = f.medium_max.xyz;
+    if (all(p >= lo) && all(p <= hi)) {
+        l = exit_distance(p, f.light.xyz, lo, hi);
+    }
+    let e_in = f.light_power.xyz * exp(-sigma_t * l);
+    let vis = visibility(p, slope_bias(shadow.params.y, cos_i));
+    return albedo / PI * cos_i * e_in * vis;
+}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3u) {
@@ -24,13 +83,14 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let s = textureLoad(scatter, p, 0).xyz;
     var c = s;
     if (t >= 0.0) {
+        let v = pixel_dir(f, vec2f(id.xy));
         var path = t;
         if (!is_point_light()) {
-            let v = pixel_dir(f, vec2f(id.xy));
             let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
             path = max(0.0, min(span.y, t) - span.x);
         }
-        c += textureLoad(surface, p, 0).xyz * exp(-f.sigma_t.xyz * path);
+        let m = textureLoad(material, p, 0);
+        c += surface_light(f.eye.xyz + v * t, m.xyz, m.w) * exp(-f.sigma_t.xyz * path);
     }
     textureStore(hdr, p, vec4f(c, 1.0));
 }

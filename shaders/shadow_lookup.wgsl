@@ -1,9 +1,11 @@
-// shadow_lookup.wgsl: where a world point falls in the shadow map, shared by Surface (2x2 filtered,
-// slope-biased) and Raymarch (one nearest texel per step).
+// shadow_lookup.wgsl: where a world point falls in the shadow map, shared by Composite (the surfaces'
+// light: 2x2 filtered, slope-biased) and Raymarch (one nearest texel per step).
 //
-// The importing file declares `f: Frame`, `shadow: ShadowFaces` and `shadow_map:
-// texture_depth_2d_array`. The map holds only depth (shadow_map.wgsl); a point is lit when its own
-// value is within a bias of the value the stored depth gives along the point's own direction:
+// The importing file declares `f: Frame`, `shadow: ShadowFaces` (a private copy for the march's
+// many lookups per pixel, the storage buffer itself for Composite's one per pixel) and
+// `shadow_map: texture_depth_2d_array`. The map holds only depth (shadow_map.wgsl); a point is lit
+// when its own value is within a bias of the value the stored depth gives along the point's own
+// direction:
 //   point light (six faces, reversed infinite perspective, depth = near / a, a the distance along
 //   the face's axis):  stored = near / depth * |P - L| / a(P - L)   (the point's |P - L| units)
 //   directional (one orthographic layer, depth = s / far, s the distance from a plane far on the

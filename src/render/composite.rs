@@ -1,9 +1,13 @@
-//! Composite: the final linear radiance of each pixel (`shaders/composite.wgsl`):
+//! Composite: lights the surfaces and gives the final linear radiance of each pixel
+//! (`shaders/composite.wgsl`):
 //!
 //!   L_pixel = L_surface * T_view + L_scatter,   T_view = exp(-sigma_t * (the view path's length in the medium))
+//!   L_surface = albedo / pi * max(cos theta_i, 0) * V_shadow_map * E_in
 //!
-//! (the medium is unbounded for a point light and fills the scene's box for a directional one; tone
-//! mapping for display happens when the image is written).
+//! Deferred lighting: Surface wrote the nearest surface's albedo, `cos theta_i` and distance, and
+//! each pixel is lit once here at `P = eye + t v`. (The medium is unbounded for a point light and
+//! fills the scene's box for a directional one; tone mapping for display happens when the image is
+//! written.)
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -13,7 +17,9 @@ bindings! {
     /// Composite's bind group (composite.wgsl).
     CompositeBindings {
         frame_in: Kind::Storage,
-        surface: Kind::Texture,
+        shadow: Kind::Storage,
+        shadow_map: Kind::DepthArray,
+        material: Kind::Texture,
         distance: Kind::Texture,
         scatter: Kind::Texture,
         hdr: Kind::StorageTexture(Composite::OUTPUT),
@@ -41,7 +47,7 @@ impl Composite {
         self.pipelines.prepare(device, variant);
     }
 
-    /// (Re)binds the inputs; called when the targets change.
+    /// (Re)binds the inputs; called when the targets or the shadow map change.
     pub fn bind(&mut self, device: &wgpu::Device, b: CompositeBindings) {
         self.bind_group = Some(b.bind(device, "Composite::bind_group", &self.layout));
     }

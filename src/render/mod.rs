@@ -132,7 +132,7 @@ impl RenderOutput {
 struct Targets {
     width: u32,
     height: u32,
-    radiance: wgpu::TextureView,
+    material: wgpu::TextureView,
     /// Kept for [`Renderer::read_view_distances`].
     distance_texture: wgpu::Texture,
     distance: wgpu::TextureView,
@@ -428,8 +428,8 @@ impl Renderer {
         use wgpu::TextureUsages as U;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let target = |label, format, usage| texture_2d(d, label, width, height, 1, format, usage);
-        let radiance =
-            target("Renderer::surface_radiance", Surface::RADIANCE, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let material =
+            target("Renderer::surface_material", Surface::MATERIAL, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
         let distance = target(
             "Renderer::surface_distance",
             Surface::DISTANCE,
@@ -442,7 +442,7 @@ impl Renderer {
         self.targets = Some(Targets {
             width,
             height,
-            radiance: view(&radiance),
+            material: view(&material),
             distance: view(&distance),
             distance_texture: distance,
             depth: view(&depth),
@@ -482,7 +482,7 @@ impl Renderer {
         let shadow = || self.shadow_uniforms.as_entire_binding();
         p.shadow_map.bind(d, &geometry.gpu);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
-        p.surface.bind(d, SurfaceBindings { frame_in: frame(), shadow_in: shadow(), shadow_map: shadow_map.clone() });
+        p.surface.bind(d, SurfaceBindings { frame_in: frame() });
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
@@ -500,7 +500,7 @@ impl Renderer {
         let raymarch = RaymarchBindings {
             frame_in: frame(),
             shadow_in: shadow(),
-            shadow_map,
+            shadow_map: shadow_map.clone(),
             distance: R::TextureView(&t.distance),
             scatter_out: R::TextureView(&t.scatter_view),
             march_in: march.as_entire_binding(),
@@ -508,7 +508,9 @@ impl Renderer {
         p.raymarch.bind(d, raymarch);
         let composite = CompositeBindings {
             frame_in: frame(),
-            surface: R::TextureView(&t.radiance),
+            shadow: shadow(),
+            shadow_map,
+            material: R::TextureView(&t.material),
             distance: R::TextureView(&t.distance),
             scatter: R::TextureView(&t.scatter_view),
             hdr: R::TextureView(&t.hdr_view),
@@ -582,7 +584,7 @@ impl Renderer {
         // The frame: an ordered list of passes.
         p.shadow_map.record(queue, &mut f.enc, v, scene, &geometry.gpu, self.shadow_face_culling);
         f.mark(Pass::ShadowMap);
-        let targets = SurfaceTargets { radiance: &t.radiance, distance: &t.distance, depth: &t.depth };
+        let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
         p.surface.record(&mut f.enc, v, &geometry.gpu, targets);
         f.mark(Pass::Surface);
         match method {
@@ -782,7 +784,7 @@ mod layout_tests {
             size_of::<ShadowCullUniforms>(),
         );
         check(
-            "surface.wgsl",
+            "composite.wgsl",
             "ShadowFaces",
             fields!(ShadowUniforms: view_proj, params, origin),
             size_of::<ShadowUniforms>(),

@@ -1,8 +1,10 @@
-//! Surface: direct lighting of the surfaces with a shadow map, and the eye distance per pixel
-//! (`shaders/surface.wgsl`).
+//! Surface: what the eye sees of the surfaces, per pixel (`shaders/surface.wgsl`): the nearest
+//! surface's albedo, `cos theta_i` toward the light and distance `t` from the eye.
 //!
-//!   L_surface = albedo / pi * |cos theta_i| * V * E_in,  E_in = I0 exp(-sigma_t d) / (d^2 + r^2)
-//!   (point) or E0 exp(-sigma_t l) (directional). The view path's attenuation is the composite's.
+//! Lighting is deferred to Composite, which evaluates
+//! `L_surface = albedo / pi * max(cos theta_i, 0) * V * E_in` once per pixel at `P = eye + t v`:
+//! shading every rasterized fragment cost as much as the rest of the pass on llvmpipe, most of it
+//! for fragments a nearer surface then covered.
 
 use super::scene_gpu::SceneGpu;
 use super::util::{bindings, scene_vertex_layout, Kind};
@@ -11,12 +13,12 @@ use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Surface's bind group (surface.wgsl).
-    SurfaceBindings { frame_in: Kind::Storage, shadow_in: Kind::Storage, shadow_map: Kind::DepthArray }
+    SurfaceBindings { frame_in: Kind::Storage }
 }
 
 /// The pass's render targets, `width x height`.
 pub struct SurfaceTargets<'a> {
-    pub radiance: &'a wgpu::TextureView,
+    pub material: &'a wgpu::TextureView,
     pub distance: &'a wgpu::TextureView,
     pub depth: &'a wgpu::TextureView,
 }
@@ -30,7 +32,9 @@ pub struct Surface {
 }
 
 impl Surface {
-    pub const RADIANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    /// Albedo (rgb) and the cosine of the light's incidence on the eye's side of the surface (a;
+    /// negative when the light is behind it).
+    pub const MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
     /// Eye distance (negative for the sky) and, for a surface lit from behind, the cosine between the
     /// view ray and its normal (0 when lit from the front).
     pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -53,7 +57,7 @@ impl Surface {
         })
     }
 
-    /// (Re)binds the inputs; called when the shadow map changes.
+    /// (Re)binds the inputs; called when the resources change.
     pub fn bind(&mut self, device: &wgpu::Device, b: SurfaceBindings) {
         self.bind_group = Some(b.bind(device, "Surface::bind_group", &self.layout));
     }
@@ -84,7 +88,7 @@ impl Surface {
                     module,
                     entry_point: Some("fs_main"),
                     compilation_options: super::util::options(constants),
-                    targets: &[Some(Self::RADIANCE.into()), Some(Self::DISTANCE.into())],
+                    targets: &[Some(Self::MATERIAL.into()), Some(Self::DISTANCE.into())],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -101,7 +105,7 @@ impl Surface {
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some(pipeline), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
-        let SurfaceTargets { radiance, distance, depth } = targets;
+        let SurfaceTargets { material, distance, depth } = targets;
         let color = |view, clear: f64| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -116,7 +120,7 @@ impl Surface {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("Surface::pass"),
             // Distance -1 marks the sky.
-            color_attachments: &[color(radiance, 0.0), color(distance, -1.0)],
+            color_attachments: &[color(material, 0.0), color(distance, -1.0)],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
