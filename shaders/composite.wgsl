@@ -28,6 +28,11 @@
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
+// The face's matrix (shadow_lookup.wgsl), indexed in the buffer: one read per pixel.
+fn face_matrix(layer: u32) -> mat4x4f {
+    return shadow.view_proj[layer];
+}
+
 // Fraction of a 2x2 texel neighbourhood that sees the light.
 fn visibility(p: vec3f, bias: f32) -> f32 {
     let s = shadow_coords(p);

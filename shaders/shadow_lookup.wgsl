@@ -2,8 +2,9 @@
 // light: 2x2 filtered, slope-biased) and Raymarch (one nearest texel per step).
 //
 // The importing file declares `f: Frame`, `shadow: ShadowFaces` (a private copy for the march's
-// many lookups per pixel, the storage buffer itself for Composite's one per pixel) and
-// `shadow_map: texture_depth_2d_array`. The map holds only depth (shadow_map.wgsl); a point is lit
+// many lookups per pixel, the storage buffer itself for Composite's one per pixel), `shadow_map:
+// texture_depth_2d_array` and `fn face_matrix(layer: u32) -> mat4x4f`, the layer's view_proj
+// (how to index the six matrices best depends on where they live). The map holds only depth (shadow_map.wgsl); a point is lit
 // when its own value is within a bias of the value the stored depth gives along the point's own
 // direction:
 //   point light (six faces, reversed infinite perspective, depth = near / a, a the distance along
@@ -55,7 +56,7 @@ fn shadow_coords(p: vec3f) -> ShadowCoords {
     } else {
         s.value = dot(shadow.origin.xyz - p, f.light.xyz);
     }
-    let clip = shadow.view_proj[s.layer] * vec4f(p, 1.0);
+    let clip = face_matrix(s.layer) * vec4f(p, 1.0);
     if (clip.w <= 0.0) { return s; }
     let ndc = clip.xy / clip.w;
     if (any(abs(ndc) > vec2f(1.0))) { return s; }
