@@ -60,23 +60,25 @@ fn slope_bias(texel: f32, cos_i: f32) -> f32 {
 fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32) -> vec3f {
     // Lit from behind (or edge-on): dark in front. The shadow lookups are skipped too.
     if (cos_i <= 0.0) { return vec3f(0.0); }
-    let sigma_t = f.sigma_t.xyz;
+    // A texel of the map spans params.y scene units (directional) or params.y per unit of distance
+    // from the light (point).
+    var texel = shadow.params.y;
+    var e_in = vec3f(0.0);
     if (is_point_light()) {
         let dist = length(f.light.xyz - p);
         let r = f.light_power.w;
-        let e_in = f.light_power.xyz * exp(-sigma_t * dist) / (dist * dist + r * r);
-        let vis = visibility(p, slope_bias(shadow.params.y * dist, cos_i));
-        return albedo / PI * cos_i * e_in * vis;
+        e_in = f.light_power.xyz * exp(-f.sigma_t.xyz * dist) / (dist * dist + r * r);
+        texel *= dist;
+    } else {
+        var l = 0.0;
+        let lo = f.medium_min.xyz;
+        let hi = f.medium_max.xyz;
+        if (all(p >= lo) && all(p <= hi)) {
+            l = exit_distance(p, f.light.xyz, lo, hi);
+        }
+        e_in = f.light_power.xyz * exp(-f.sigma_t.xyz * l);
     }
-    var l = 0.0;
-    let lo = f.medium_min.xyz;
-    let hi = f.medium_max.xyz;
-    if (all(p >= lo) && all(p <= hi)) {
-        l = exit_distance(p, f.light.xyz, lo, hi);
-    }
-    let e_in = f.light_power.xyz * exp(-sigma_t * l);
-    let vis = visibility(p, slope_bias(shadow.params.y, cos_i));
-    return albedo / PI * cos_i * e_in * vis;
+    return albedo / PI * cos_i * e_in * visibility(p, slope_bias(texel, cos_i));
 }
 
 @compute @workgroup_size(8, 8)

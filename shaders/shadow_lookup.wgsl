@@ -4,9 +4,9 @@
 // The importing file declares `f: Frame`, `shadow: ShadowFaces` (a private copy for the march's
 // many lookups per pixel, the storage buffer itself for Composite's one per pixel), `shadow_map:
 // texture_depth_2d_array` and `fn face_matrix(layer: u32) -> mat4x4f`, the layer's view_proj
-// (how to index the six matrices best depends on where they live). The map holds only depth (shadow_map.wgsl); a point is lit
-// when its own value is within a bias of the value the stored depth gives along the point's own
-// direction:
+// (how to index the six matrices best depends on where they live). The map holds only depth
+// (shadow_map.wgsl); a point is lit when its own value is within a bias of the value the stored
+// depth gives along the point's own direction:
 //   point light (six faces, reversed infinite perspective, depth = near / a, a the distance along
 //   the face's axis):  stored = near / depth * |P - L| / a(P - L)   (the point's |P - L| units)
 //   directional (one orthographic layer, depth = s / far, s the distance from a plane far on the

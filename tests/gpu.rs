@@ -163,6 +163,21 @@ fn broken_shader_reload_keeps_the_last_good_pipelines() {
     assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
 }
 
+/// A VSV frame of `scene`, where its view rays end, and the reference integrated along those same
+/// view segments (so that primary visibility cannot differ between the two).
+fn along_the_same_segments(
+    r: &mut epivox::render::Renderer,
+    scene: &epivox::Scene,
+    w: u32,
+    h: u32,
+) -> (epivox::render::RenderOutput, Vec<f32>, reference::ReferenceImage) {
+    let out = r.render(scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let distance = r.read_view_distances().unwrap_or_else(|e| panic!("{e}"));
+    let o = ReferenceOptions { progress: false, ..Default::default() };
+    let along = reference::render_ending(scene, w, h, &o, reference::ViewEnds::Given(&distance));
+    (out, distance, along)
+}
+
 /// The view distances a GPU render returns are where the reference's view rays first hit (the sky
 /// is infinite in both) except at the odd pixel whose centre lies within the rasterizer's
 /// sub-pixel precision of a silhouette edge, and along those same view segments the reference
@@ -172,14 +187,11 @@ fn view_distances_are_the_first_hits_and_the_segments_compare() {
     let Some(mut r) = renderer() else { return };
     let scene = epivox::scene::builtin_scene();
     let (w, h) = (96, 96);
-    let out = r.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-    let distance = r.read_view_distances().unwrap_or_else(|e| panic!("{e}"));
-    let o = ReferenceOptions { progress: false, ..Default::default() };
-    let own = reference::render(&scene, w, h, &o);
+    let (out, distance, along) = along_the_same_segments(&mut r, &scene, w, h);
+    let own = reference::render(&scene, w, h, &ReferenceOptions { progress: false, ..Default::default() });
     assert_eq!(distance.len(), own.depth.len());
     let sky = own.depth.iter().filter(|d| d.is_infinite()).count();
     assert!(sky > 100, "the window shows the sky ({sky} pixels)");
-    let along = reference::render_ending(&scene, w, h, &o, reference::ViewEnds::Given(&distance));
     // f32 depth against f64 hits: 1e-3 relative is another surface, not rounding (the renderer's
     // `segments_differing` uses the same test). Measured: 0 of 9 216 pixels.
     assert!(along.segments_differing <= 5, "{} pixels see another surface", along.segments_differing);
@@ -207,11 +219,7 @@ fn surfaces_are_lit_as_the_reference_lights_them() {
         ("built-in room", epivox::scene::builtin_scene(), 0.9),
         ("occluder under the sun", occluder_scene(directional), 0.9),
     ] {
-        let (w, h) = (96, 96);
-        let out = r.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-        let distance = r.read_view_distances().unwrap_or_else(|e| panic!("{e}"));
-        let o = ReferenceOptions { progress: false, ..Default::default() };
-        let along = reference::render_ending(&scene, w, h, &o, reference::ViewEnds::Given(&distance));
+        let (out, _, along) = along_the_same_segments(&mut r, &scene, 96, 96);
         let (mut lit, mut agree) = (0usize, 0usize);
         for (((g, gs), e), es) in
             out.hdr.pixels.iter().zip(&out.scatter.pixels).zip(&along.hdr.pixels).zip(&along.scatter.pixels)
