@@ -29,15 +29,19 @@
 // exclusive prefix sum of the blocks.
 @group(0) @binding(4) var<storage, read_write> blocks: array<u32>;
 // [0] kept (this chunk), [1] culled by z, [2] culled by rays or planes, [3] items (this chunk),
-// [4] kept (all chunks), [5] items (all chunks), [6] items dropped because the list overflowed.
+// [4] kept (all chunks), [5] items (all chunks), [6] items dropped because the list overflowed,
+// [7] culled as a closed mesh's face turned away from the light.
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
 // DispatchIndirect arguments: [3..6] Voxelize, [6..9] Scan ([0..3] unused).
 @group(0) @binding(6) var<storage, read_write> dispatch: array<u32, 12>;
+// Per mesh (the first vertex's w holds a triangle's mesh): +1 keep only the faces whose winding
+// normal (b - a) x (c - a) faces the light, -1 only those facing away, 0 all (SceneGpu).
+@group(0) @binding(7) var<storage, read> sides: array<f32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
-const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (256 threads x 4)
+const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (64 threads x 16)
 const VOXEL_GROUP: u32 = 64u; // Voxelize's workgroup size
 const MAX_GROUPS: u32 = 65535u;
 
@@ -56,39 +60,71 @@ fn word_range(z: vec2f) -> vec2u {
     return vec2u(w0, w1 - w0 + 1u);
 }
 
+// Why a triangle is dropped, or its record and items.
+struct Kept {
+    // 0: kept, 1: culled by z, 2: culled by rays or planes, 3: a solid's face away from the light.
+    why: u32,
+    record: vec4u,
+    items: u32,
+}
+
+fn cull_one(tri: u32) -> Kept {
+    // A triangle of zero area hides no light ray: no work for it (loaders drop them too).
+    var k = Kept(2u, vec4u(0u), 0u);
+    let v0 = tris[3u * tri];
+    let p0 = v0.xyz;
+    let n = cross(tris[3u * tri + 1u].xyz - p0, tris[3u * tri + 2u].xyz - p0);
+    if (all(n == vec3f(0.0))) { return k; }
+    // A closed mesh's face turned away from a light outside it: the light's rays enter the solid
+    // through a face toward the light first, and the scan shadows everything behind that hit
+    // (src/scene/solid.rs). Edge-on faces (dot 0) are kept.
+    k.why = 3u;
+    let to_light = select(f.light.xyz, f.light.xyz - p0, is_point_light());
+    if (sides[bitcast<u32>(v0.w)] * dot(n, to_light) < 0.0) { return k; }
+    k.why = 2u;
+    let rects = triangle_rects(tri);
+    if (rects.a.x >= rects.a.z) { return k; }
+    let z = triangle_z_range(tri);
+    let words = word_range(z);
+    k.why = 1u;
+    if (words.y == 0u) { return k; }
+    // Planes as one range, wrapping past the last plane when the planes cover the full circle.
+    let x0 = u32(rects.a.x);
+    var nx = u32(rects.a.z) - x0;
+    if (rects.b.x < rects.b.z) { nx += u32(rects.b.z) - u32(rects.b.x); }
+    nx = min(nx, f.grid.x);
+    k.why = 0u;
+    k.record = vec4u(tri, x0, nx, words.x | (words.y << 16u));
+    k.items = nx * words.y;
+    return k;
+}
+
+// A thread culls a run of f.table.w consecutive triangles (16 on a CPU, 1 on a GPU; Voxelize's
+// run of items): on a CPU adapter a workgroup's start-up and the parameters' copy cost as much as
+// culling a triangle.
 @compute @workgroup_size(64)
 fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     f = frame_in;
     // Meshes past the adapter's largest binding come in chunks: `tris` is this chunk's, and the
     // records hold indices into it.
-    let tri = id.x + id.y * groups.x * 64u;
-    if (tri >= arrayLength(&tris) / 3u) { return; }
-    // A triangle of zero area hides no light ray: no work for it (loaders drop them too).
-    let p0 = tris[3u * tri].xyz;
-    if (all(cross(tris[3u * tri + 1u].xyz - p0, tris[3u * tri + 2u].xyz - p0) == vec3f(0.0))) {
-        atomicAdd(&counters[2], 1u);
-        return;
+    let count = arrayLength(&tris) / 3u;
+    let run = max(f.table.w, 1u);
+    let first = (id.x + id.y * groups.x * 64u) * run;
+    let last = min(first + run, count);
+    var culled = vec3u(0u);
+    for (var tri = first; tri < last; tri++) {
+        let k = cull_one(tri);
+        if (k.why == 0u) {
+            let slot = atomicAdd(&counters[0], 1u);
+            records[slot] = k.record;
+            offsets[slot] = k.items;
+        } else {
+            culled[k.why - 1u] += 1u;
+        }
     }
-    let rects = triangle_rects(tri);
-    if (rects.a.x >= rects.a.z) {
-        atomicAdd(&counters[2], 1u);
-        return;
-    }
-    let z = triangle_z_range(tri);
-    let words = word_range(z);
-    if (words.y == 0u) {
-        atomicAdd(&counters[1], 1u);
-        return;
-    }
-    // Planes as one range, wrapping past the last plane when the planes cover the full circle.
-    var x0 = u32(rects.a.x);
-    var nx = u32(rects.a.z) - x0;
-    if (rects.b.x < rects.b.z) { nx += u32(rects.b.z) - u32(rects.b.x); }
-    nx = min(nx, f.grid.x);
-    let items = nx * words.y;
-    let slot = atomicAdd(&counters[0], 1u);
-    records[slot] = vec4u(tri, x0, nx, words.x | (words.y << 16u));
-    offsets[slot] = items;
+    if (culled.x > 0u) { atomicAdd(&counters[1], culled.x); }
+    if (culled.y > 0u) { atomicAdd(&counters[2], culled.y); }
+    if (culled.z > 0u) { atomicAdd(&counters[7], culled.z); }
 }
 
 @compute @workgroup_size(1)
@@ -114,31 +150,43 @@ fn scan_partial(lid: u32) {
     workgroupBarrier();
 }
 
-@compute @workgroup_size(256)
+// offsets_local runs 64 threads of 16 consecutive counts each: on a CPU adapter every barrier
+// switches between all of a workgroup's invocations, and 256 threads x 4 spent 40 of the pass's
+// ~175 ms at a million kept triangles in the Hillis-Steele steps' barriers.
+const LOCAL_THREADS: u32 = 64u;
+const PER_THREAD: u32 = 16u; // LOCAL_THREADS x PER_THREAD = BLOCK
+var<workgroup> partial_local: array<u32, 64>;
+
+@compute @workgroup_size(64)
 fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
     f = frame_in;
     if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
     // Dispatched for every triangle of the chunk: blocks past the kept ones have nothing to do.
     if (wg.x >= workgroupUniformLoad(&block_count)) { return; }
     let kept = atomicLoad(&counters[0]);
-    let base = wg.x * BLOCK + lid * 4u;
-    var v = vec4u(0u);
-    for (var i = 0u; i < 4u; i++) {
-        if (base + i < kept) { v[i] = offsets[base + i]; }
-    }
+    let base = wg.x * BLOCK + lid * PER_THREAD;
+    let end = min(base + PER_THREAD, kept);
     // Sums saturate: a list past 2^32 items is cut (counted in counters[6]) rather than wrapped.
-    let s1 = sat_add(v.x, v.y);
-    let s2 = sat_add(s1, v.z);
-    let s3 = sat_add(s2, v.w);
-    partial[lid] = s3;
-    scan_partial(lid);
-    var before = 0u;
-    if (lid > 0u) { before = partial[lid - 1u]; }
-    let ex = vec4u(before, sat_add(before, v.x), sat_add(before, s1), sat_add(before, s2));
-    for (var i = 0u; i < 4u; i++) {
-        if (base + i < kept) { offsets[base + i] = ex[i]; }
+    var sum = 0u;
+    for (var i = base; i < end; i++) { sum = sat_add(sum, offsets[i]); }
+    partial_local[lid] = sum;
+    // Inclusive scan over the 64 threads (Hillis-Steele, 6 steps).
+    for (var step = 1u; step < LOCAL_THREADS; step <<= 1u) {
+        workgroupBarrier();
+        var add = 0u;
+        if (lid >= step) { add = partial_local[lid - step]; }
+        workgroupBarrier();
+        partial_local[lid] += add;
     }
-    if (lid == 255u) { blocks[wg.x] = partial[255]; }
+    workgroupBarrier();
+    var running = 0u;
+    if (lid > 0u) { running = partial_local[lid - 1u]; }
+    for (var i = base; i < end; i++) {
+        let v = offsets[i];
+        offsets[i] = running;
+        running = sat_add(running, v);
+    }
+    if (lid == LOCAL_THREADS - 1u) { blocks[wg.x] = partial_local[LOCAL_THREADS - 1u]; }
 }
 
 fn sat_add(a: u32, b: u32) -> u32 {

@@ -25,6 +25,11 @@ struct ShadowCull {
 // Six DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
 // instance); the index counts start at 0 each frame.
 @group(0) @binding(4) var<storage, read_write> args: array<atomic<u32>, 30>;
+// Per triangle: its mesh.
+@group(0) @binding(5) var<storage, read> triangle_meshes: array<u32>;
+// Per mesh: +1 keep only the faces whose winding normal (b - a) x (c - a) faces the light, -1
+// only those facing away, 0 all (SceneGpu::light_sides).
+@group(0) @binding(6) var<storage, read> sides: array<f32>;
 
 fn position(i: u32) -> vec3f {
     return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
@@ -53,6 +58,8 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     let q0 = position(i0) - l;
     let q1 = position(i1) - l;
     let q2 = position(i2) - l;
+    // Toward the light is -q0; edge-on faces (dot 0) are kept.
+    if (sides[triangle_meshes[t]] * dot(cross(q1 - q0, q2 - q0), q0) > 0.0) { return; }
     for (var k = 0u; k < 6u; k++) {
         let outside = planes(q0, k) < vec4f(0.0) & planes(q1, k) < vec4f(0.0) & planes(q2, k) < vec4f(0.0);
         if (any(outside)) { continue; }

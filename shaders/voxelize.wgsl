@@ -7,7 +7,8 @@
 //
 //   geometry[x, y, k] = 1   where light ray (phi_x, z_k) meets it at an angle gamma in ray cell y
 //
-// (every hit, not only the first, so the inspector's geometry layer shows the surfaces). The rays
+// (every hit, not only the first, so the inspector's geometry layer shows the surfaces; of a solid
+// the light lies outside of, only the faces toward the light, which Cull keeps). The rays
 // y stay binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the
 // same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
 // light (Integrate blends rays forward only, so it never leaks through a closed surface).

@@ -2,7 +2,9 @@
 //! (`shaders/cull.wgsl`).
 //!
 //! A triangle outside the visible wedge of planes, past the last visible ray, or outside the bins'
-//! z range is dropped. A kept one gets a record and `items = planes x words`, the light-space
+//! z range is dropped, and so is a closed mesh's face turned away from a light outside it (its
+//! light rays enter the solid through a face toward the light first, and the scan shadows all
+//! behind that). A kept one gets a record and `items = planes x words`, the light-space
 //! samples it may cover in units of one plane x one 32-bit word of bins; an exclusive prefix sum
 //! over the items (1024 per workgroup, then the blocks) lets Voxelize give every item its own
 //! thread through an indirect dispatch. Scan's indirect dispatch is empty when nothing is kept, so
@@ -22,6 +24,7 @@ bindings! {
         blocks: Kind::StorageRw,
         counters: Kind::StorageRw,
         dispatch: Kind::StorageRw,
+        sides: Kind::Storage,
     }
 }
 
@@ -34,6 +37,9 @@ pub struct CullCounts {
     pub culled_depth: u32,
     /// Dropped: outside the visible wedge of planes, past the last visible ray, or of zero area.
     pub culled_view: u32,
+    /// Dropped: a face of a closed mesh turned away from the light, which lies outside it
+    /// (`crate::scene::solid`); the light meets that solid through its faces toward it first.
+    pub culled_back: u32,
     /// Voxelize's work items (one triangle x one plane x one 32-bit word of bins).
     pub items: u64,
 }
@@ -76,7 +82,7 @@ pub struct Cull {
     /// One per chunk of triangles, with the chunk's triangle count.
     bind_groups: Vec<(wgpu::BindGroup, u32)>,
     /// `[kept (chunk), culled by depth, culled by view, items (chunk), kept (all), items (all),
-    /// overflowed lists, unused]`.
+    /// overflowed lists, culled as back faces]`.
     pub counters: wgpu::Buffer,
     /// DispatchIndirect arguments: Voxelize at 12, Scan at 24.
     pub dispatch: wgpu::Buffer,
@@ -138,6 +144,7 @@ impl Cull {
                     blocks: l.blocks.as_entire_binding(),
                     counters: self.counters.as_entire_binding(),
                     dispatch: self.dispatch.as_entire_binding(),
+                    sides: geometry.light_sides.as_entire_binding(),
                 };
                 (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), n)
             })
@@ -155,8 +162,9 @@ impl Cull {
         encoder.clear_buffer(&self.dispatch, 0, None);
     }
 
-    /// Culls chunk `chunk` of the scene's triangles and builds its work list.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, chunk: usize) {
+    /// Culls chunk `chunk` of the scene's triangles and builds its work list; each thread takes
+    /// `per_thread` consecutive triangles (the frame uniforms' `table.w`, Voxelize's run).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, chunk: usize, per_thread: u32) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some([cull, finish, local, blocks]), Some((bind_group, triangles))) =
             (self.pipelines.get(variant), self.bind_groups.get(chunk))
@@ -171,8 +179,8 @@ impl Cull {
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Cull::pass"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_pipeline(cull);
-        // Two dimensions past 65535 workgroups (4M triangles).
-        let groups = triangles.div_ceil(64).max(1);
+        // Two dimensions past 65535 workgroups (4M threads).
+        let groups = triangles.div_ceil(64 * per_thread.max(1)).max(1);
         let (gx, gy) = if groups > 65535 { (65535, groups.div_ceil(65535)) } else { (groups, 1) };
         pass.dispatch_workgroups(gx, gy, 1);
         pass.set_pipeline(finish);

@@ -38,7 +38,7 @@ pub use scan::{Scan, ScanBindings};
 pub use scatter_table::{ScatterTable, ScatterTableBindings};
 pub use scene_gpu::SceneGpu;
 pub use shadow_map::{
-    FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms,
+    FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowCulling, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
@@ -227,6 +227,10 @@ pub struct Renderer {
     /// Point lights: each cube face draws only the triangles that can reach it (on by default;
     /// off only to compare, `tests/shadow_faces.rs`).
     pub shadow_face_culling: bool,
+    /// Solids (closed meshes, `crate::scene::solid`) seen from outside draw and voxelize only
+    /// their faces toward the eye or the light (on by default; off only to compare,
+    /// `tests/solids.rs`).
+    pub back_face_culling: bool,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -271,6 +275,7 @@ impl Renderer {
             passes,
             prune: true,
             shadow_face_culling: true,
+            back_face_culling: true,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -373,7 +378,7 @@ impl Renderer {
     pub fn cull_counts(&self) -> Result<CullCounts, GpuError> {
         let bytes = self.ctx.read_buffer(&self.passes.cull.counters)?;
         let v: &[u32] = bytemuck::cast_slice(&bytes);
-        Ok(CullCounts { kept: v[4], culled_depth: v[1], culled_view: v[2], items: v[5] as u64 })
+        Ok(CullCounts { kept: v[4], culled_depth: v[1], culled_view: v[2], culled_back: v[7], items: v[5] as u64 })
     }
 
     /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
@@ -581,11 +586,22 @@ impl Renderer {
         if let Some(t) = f.timer.as_deref_mut() {
             t.begin(&mut f.enc);
         }
+        // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
+        let g = &geometry.gpu;
+        let light_facing = g.light_facing(&scene.light, self.back_face_culling);
+        g.write_light_sides(queue, &light_facing);
+        let u = &setup.uniforms;
+        let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
+        let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
+        let eye_runs = g.draw_runs(&g.eye_facing(eye, near_corner, self.back_face_culling));
+        let ahead = 2.0 * near.max(1e-4);
+        let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
         // The frame: an ordered list of passes.
-        p.shadow_map.record(queue, &mut f.enc, v, scene, &geometry.gpu, self.shadow_face_culling);
+        let culling = ShadowCulling { faces: self.shadow_face_culling, light_facing: &light_facing };
+        p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
         f.mark(Pass::ShadowMap);
         let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
-        p.surface.record(&mut f.enc, v, &geometry.gpu, targets);
+        p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
         f.mark(Pass::Surface);
         match method {
             Method::Raymarch { steps, jitter } => {
@@ -606,7 +622,7 @@ impl Renderer {
                 p.cull.begin_frame(&mut f.enc);
                 // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
                 for chunk in 0..p.cull.chunks() {
-                    p.cull.record(&mut f.enc, v, chunk);
+                    p.cull.record(&mut f.enc, v, chunk, p.voxelize.items_per_thread);
                     f.mark(Pass::Cull);
                     p.voxelize.record(&mut f.enc, v, chunk, &p.cull.dispatch);
                     f.mark(Pass::Voxelize);

@@ -1,8 +1,45 @@
-//! The scene's geometry on the GPU, uploaded once per scene.
+//! The scene's geometry on the GPU, uploaded once per scene, and which of its meshes bound solids
+//! (`crate::scene::solid`): their faces turned away from a viewpoint outside them are skipped.
 
 use super::cull::CullLists;
-use crate::scene::Scene;
+use crate::params::Light;
+use crate::scene::solid::{self, Closure};
+use crate::scene::{Aabb, Scene};
+use rayon::prelude::*;
+use std::ops::Range;
 use wgpu::util::DeviceExt;
+
+/// One mesh of the uploaded scene: its triangles' place in the index buffer and whether it bounds
+/// a solid.
+#[derive(Debug, Clone)]
+pub struct MeshRange {
+    pub closure: Closure,
+    pub bounds: Aabb,
+    /// Its indices in [`SceneGpu::indices`].
+    pub indices: Range<u32>,
+}
+
+/// Which faces a raster pass skips for a run of meshes, by their winding normal
+/// `(b - a) x (c - a)` against the direction toward the viewpoint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Facing {
+    /// Both sides drawn: open meshes, and solids that hold the viewpoint.
+    Both,
+    /// Only the triangles whose winding normal faces the viewpoint (outward solids).
+    Toward,
+    /// Only those whose winding normal faces away (inward solids).
+    Away,
+}
+
+impl Facing {
+    fn of(closure: Closure, outside: bool) -> Facing {
+        match (closure, outside) {
+            (Closure::Outward, true) => Facing::Toward,
+            (Closure::Inward, true) => Facing::Away,
+            _ => Facing::Both,
+        }
+    }
+}
 
 /// Vertex/index buffers for rasterizing surfaces, and the triangle list the voxelizer pulls from.
 pub struct SceneGpu {
@@ -17,6 +54,14 @@ pub struct SceneGpu {
     pub triangle_count: u32,
     /// The Cull pass's lists, sized for the largest chunk.
     pub lists: CullLists,
+    /// Per mesh, in upload order (the index buffer holds them one after the other).
+    pub meshes: Vec<MeshRange>,
+    /// Per triangle: its mesh (u32), for the shadow map's face culling. The triangle chunks carry
+    /// it too, in the first vertex's `w`.
+    pub triangle_meshes: wgpu::Buffer,
+    /// Per mesh, written each frame by [`SceneGpu::write_light_sides`]: `+1` keep only triangles
+    /// whose winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
+    pub light_sides: wgpu::Buffer,
 }
 
 impl SceneGpu {
@@ -34,16 +79,24 @@ impl SceneGpu {
         let mut vertices: Vec<[f32; 6]> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(scene.triangle_count() * 3);
-        for m in &scene.meshes {
+        let mut triangle_meshes: Vec<u32> = Vec::with_capacity(scene.triangle_count());
+        let closures: Vec<Closure> = scene.meshes.par_iter().map(solid::closure).collect();
+        let mut meshes = Vec::with_capacity(scene.meshes.len());
+        for (mesh, (m, &closure)) in scene.meshes.iter().zip(&closures).enumerate() {
             let base = vertices.len() as u32;
+            let first = indices.len() as u32;
             vertices.extend(m.positions.iter().map(|p| [p.x, p.y, p.z, m.albedo.x, m.albedo.y, m.albedo.z]));
             for t in &m.triangles {
                 indices.extend(t.iter().map(|&i| base + i));
-                for &i in t {
+                triangle_meshes.push(mesh as u32);
+                for (k, &i) in t.iter().enumerate() {
                     let p = m.positions[i as usize];
-                    tris.push([p.x, p.y, p.z, 0.0]);
+                    // The first vertex's w: the mesh (bits of a u32), for Cull's side test.
+                    let w = if k == 0 { f32::from_bits(mesh as u32) } else { 0.0 };
+                    tris.push([p.x, p.y, p.z, w]);
                 }
             }
+            meshes.push(MeshRange { closure, bounds: m.bounds(), indices: first..indices.len() as u32 });
         }
         let triangle_count = (tris.len() / 3) as u32;
         if tris.is_empty() {
@@ -80,6 +133,20 @@ impl SceneGpu {
             })
             .collect();
         let largest = chunks.iter().map(|(_, n)| *n).max().unwrap_or(1);
+        if triangle_meshes.is_empty() {
+            triangle_meshes.push(0);
+        }
+        let triangle_meshes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("SceneGpu::triangle_meshes"),
+            contents: bytemuck::cast_slice(&triangle_meshes),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let light_sides = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SceneGpu::light_sides"),
+            size: 4 * meshes.len().max(1) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         SceneGpu {
             vertices: vb,
             indices: ib,
@@ -87,6 +154,103 @@ impl SceneGpu {
             chunks,
             triangle_count,
             lists: CullLists::new(device, largest),
+            meshes,
+            triangle_meshes,
+            light_sides,
         }
+    }
+
+    /// Which side of each mesh the light can see first: the solids the light lies outside of
+    /// (by more than its radius; a sun is outside every mesh) keep only their faces toward it.
+    pub fn light_facing(&self, light: &Light, enabled: bool) -> Vec<Facing> {
+        let outside = |b: &Aabb| match *light {
+            Light::Point { position, radius, .. } => solid::outside(b, position, radius),
+            Light::Directional { .. } => true,
+        };
+        self.meshes
+            .iter()
+            .map(|m| if enabled { Facing::of(m.closure, outside(&m.bounds)) } else { Facing::Both })
+            .collect()
+    }
+
+    /// Writes [`SceneGpu::light_sides`] from [`SceneGpu::light_facing`].
+    pub fn write_light_sides(&self, queue: &wgpu::Queue, facing: &[Facing]) {
+        let sides: Vec<f32> = facing
+            .iter()
+            .map(|f| match f {
+                Facing::Both => 0.0,
+                Facing::Toward => 1.0,
+                Facing::Away => -1.0,
+            })
+            .collect();
+        if !sides.is_empty() {
+            queue.write_buffer(&self.light_sides, 0, bytemuck::cast_slice(&sides));
+        }
+    }
+
+    /// The index ranges a raster pass draws, each with the faces it keeps ([`draw_runs`]).
+    pub fn draw_runs(&self, facing: &[Facing]) -> Vec<(Range<u32>, Facing)> {
+        draw_runs(&self.meshes, facing)
+    }
+
+    /// Which faces the eye can see first: the solids it lies outside of, by more than the
+    /// distance to the near plane's farthest corner (so that no near-plane cut opens one), keep
+    /// only their faces toward it.
+    pub fn eye_facing(&self, eye: glam::Vec3, near_corner: f32, enabled: bool) -> Vec<Facing> {
+        self.meshes
+            .iter()
+            .map(|m| {
+                if enabled {
+                    Facing::of(m.closure, solid::outside(&m.bounds, eye, near_corner))
+                } else {
+                    Facing::Both
+                }
+            })
+            .collect()
+    }
+}
+
+/// The index ranges that draw `meshes`, each with the faces it keeps (`facing`, per mesh):
+/// consecutive meshes that keep the same faces share one draw, and empty meshes draw nothing.
+pub fn draw_runs(meshes: &[MeshRange], facing: &[Facing]) -> Vec<(Range<u32>, Facing)> {
+    let mut runs: Vec<(Range<u32>, Facing)> = Vec::new();
+    for (m, &f) in meshes.iter().zip(facing) {
+        if m.indices.is_empty() {
+            continue;
+        }
+        match runs.last_mut() {
+            Some((r, g)) if *g == f && r.end == m.indices.start => r.end = m.indices.end,
+            _ => runs.push((m.indices.clone(), f)),
+        }
+    }
+    runs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn mesh(closure: Closure, indices: Range<u32>) -> MeshRange {
+        MeshRange { closure, bounds: Aabb { min: Vec3::ZERO, max: Vec3::ONE }, indices }
+    }
+
+    #[test]
+    fn runs_merge_neighbours_that_keep_the_same_faces() {
+        let meshes = [
+            mesh(Closure::Open, 0..6),
+            mesh(Closure::Outward, 6..12),
+            mesh(Closure::Outward, 12..12),
+            mesh(Closure::Outward, 12..30),
+            mesh(Closure::Inward, 30..36),
+        ];
+        let facing: Vec<Facing> = meshes.iter().map(|m| Facing::of(m.closure, true)).collect();
+        assert_eq!(
+            draw_runs(&meshes, &facing),
+            vec![(0..6, Facing::Both), (6..30, Facing::Toward), (30..36, Facing::Away)]
+        );
+        // Seen from inside, every mesh draws both sides: one draw.
+        let inside: Vec<Facing> = meshes.iter().map(|m| Facing::of(m.closure, false)).collect();
+        assert_eq!(draw_runs(&meshes, &inside), vec![(0..36, Facing::Both)]);
     }
 }

@@ -15,8 +15,8 @@
 //! work, which on llvmpipe is single-threaded and was the largest cost of big scenes under a
 //! point light. Skipped (every face draws all) when the lists would not fit a storage binding.
 
-use super::scene_gpu::SceneGpu;
-use super::util::{bindings, scene_vertex_layout, texture_2d, Kind};
+use super::scene_gpu::{Facing, SceneGpu};
+use super::util::{bindings, cull_mode, scene_vertex_layout, texture_2d, toward_is_ccw, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use crate::params::Light;
@@ -37,6 +37,8 @@ bindings! {
         indices: Kind::Storage,
         lists: Kind::StorageRw,
         args: Kind::StorageRw,
+        triangle_meshes: Kind::Storage,
+        sides: Kind::Storage,
     }
 }
 
@@ -65,6 +67,14 @@ struct FaceLists {
     index_count: u32,
 }
 
+/// What [`ShadowMap::record`] leaves out.
+pub struct ShadowCulling<'a> {
+    /// Point light: each face draws only the triangles that can reach it.
+    pub faces: bool,
+    /// Per mesh: the faces the light can see first ([`SceneGpu::light_facing`]).
+    pub light_facing: &'a [Facing],
+}
+
 /// One face's uniforms (`struct Face` in the WGSL).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -89,7 +99,8 @@ pub struct ShadowUniforms {
 pub struct ShadowMap {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: VariantPipelines<wgpu::RenderPipeline>,
+    /// Per variant, one pipeline per cull mode ([`super::util::facing_pipelines`]).
+    pipelines: VariantPipelines<Vec<wgpu::RenderPipeline>>,
     pub size: u32,
     /// [`ShadowMap::FORMAT`], six layers.
     pub map: wgpu::Texture,
@@ -229,6 +240,8 @@ impl ShadowMap {
             indices: geometry.indices.as_entire_binding(),
             lists: lists.as_entire_binding(),
             args: args.as_entire_binding(),
+            triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
+            sides: geometry.light_sides.as_entire_binding(),
         }
         .bind(device, "ShadowMap::cull_bind_group", &self.cull_layout);
         self.face_lists = Some(FaceLists {
@@ -246,27 +259,29 @@ impl ShadowMap {
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
         let (module, pl) = (&self.module, &self.pipeline_layout);
         self.pipelines.prepare(variant, |constants, v| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(&format!("ShadowMap::pipeline{v}")),
-                layout: Some(pl),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: super::util::options(constants),
-                    buffers: &[Some(scene_vertex_layout())],
-                },
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: Self::FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(Self::compare(variant.point_light)),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
+            super::util::facing_pipelines(|cull, name| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&format!("ShadowMap::pipeline{v}{name}")),
+                    layout: Some(pl),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: super::util::options(constants),
+                        buffers: &[Some(scene_vertex_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState { cull_mode: cull, ..Default::default() },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: Self::FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(Self::compare(variant.point_light)),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
             })
         });
     }
@@ -360,10 +375,14 @@ impl ShadowMap {
         variant: Variant,
         scene: &Scene,
         geometry: &SceneGpu,
-        face_culling: bool,
+        culling: ShadowCulling,
     ) {
         // Renderer::render_frame prepares every variant it records.
-        let Some(pipeline) = self.pipelines.get(variant) else { return };
+        let Some(pipelines) = self.pipelines.get(variant) else { return };
+        let face_culling = culling.faces;
+        // The solids the light lies outside of draw only their faces toward it (the face lists
+        // of a point light already left the others out).
+        let runs = geometry.draw_runs(culling.light_facing);
         let (faces, _, count) = self.uniforms(scene);
         let culled = match (&self.face_lists, scene.light) {
             (Some(fl), Light::Point { position, .. }) if face_culling && count == 6 => {
@@ -401,17 +420,25 @@ impl ShadowMap {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
             match culled {
                 Some(fl) => {
+                    pass.set_pipeline(&pipelines[0]);
                     pass.set_index_buffer(fl.lists.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed_indirect(&fl.args, 20 * i as u64);
                 }
                 None => {
+                    // A point in front of the face and the way back to the light (a point light's
+                    // position, or the direction toward the sun).
+                    let at = face.view_proj.inverse().project_point3(Vec3::new(0.0, 0.0, 0.5));
+                    let toward = face.light.truncate() - face.light.w * at;
+                    let ccw = toward_is_ccw(face.view_proj, at, toward);
                     pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..geometry.index_count, 0, 0..1);
+                    for (range, facing) in &runs {
+                        pass.set_pipeline(&pipelines[cull_mode(*facing, ccw).0]);
+                        pass.draw_indexed(range.clone(), 0, 0..1);
+                    }
                 }
             }
         }

@@ -5,9 +5,12 @@
 //! `L_surface = albedo / pi * max(cos theta_i, 0) * V * E_in` once per pixel at `P = eye + t v`:
 //! shading every rasterized fragment cost as much as the rest of the pass on llvmpipe, most of it
 //! for fragments a nearer surface then covered.
+//!
+//! The solids the eye lies outside of draw only their faces toward it (`crate::scene::solid`):
+//! the scene is drawn as runs of consecutive meshes that cull the same faces.
 
-use super::scene_gpu::SceneGpu;
-use super::util::{bindings, scene_vertex_layout, Kind};
+use super::scene_gpu::{Facing, SceneGpu};
+use super::util::{bindings, cull_mode, scene_vertex_layout, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
@@ -26,7 +29,8 @@ pub struct SurfaceTargets<'a> {
 pub struct Surface {
     module: wgpu::ShaderModule,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: VariantPipelines<wgpu::RenderPipeline>,
+    /// Per variant, one pipeline per cull mode ([`super::util::facing_pipelines`]).
+    pipelines: VariantPipelines<Vec<wgpu::RenderPipeline>>,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
 }
@@ -66,32 +70,34 @@ impl Surface {
     pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
         let (module, pl) = (&self.module, &self.pipeline_layout);
         self.pipelines.prepare(variant, |constants, v| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(&format!("Surface::pipeline{v}")),
-                layout: Some(pl),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: super::util::options(constants),
-                    buffers: &[Some(scene_vertex_layout())],
-                },
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: Self::DEPTH,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: super::util::options(constants),
-                    targets: &[Some(Self::MATERIAL.into()), Some(Self::DISTANCE.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
+            super::util::facing_pipelines(|cull, name| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&format!("Surface::pipeline{v}{name}")),
+                    layout: Some(pl),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: super::util::options(constants),
+                        buffers: &[Some(scene_vertex_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState { cull_mode: cull, ..Default::default() },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: Self::DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fs_main"),
+                        compilation_options: super::util::options(constants),
+                        targets: &[Some(Self::MATERIAL.into()), Some(Self::DISTANCE.into())],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
             })
         });
     }
@@ -102,9 +108,11 @@ impl Surface {
         variant: Variant,
         geometry: &SceneGpu,
         targets: SurfaceTargets,
+        runs: &[(std::ops::Range<u32>, Facing)],
+        toward_ccw: bool,
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
-        let (Some(pipeline), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
+        let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let SurfaceTargets { material, distance, depth } = targets;
         let color = |view, clear: f64| {
             Some(wgpu::RenderPassColorAttachment {
@@ -130,10 +138,12 @@ impl Surface {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..geometry.index_count, 0, 0..1);
+        for (range, facing) in runs {
+            pass.set_pipeline(&pipelines[cull_mode(*facing, toward_ccw).0]);
+            pass.draw_indexed(range.clone(), 0, 0..1);
+        }
     }
 }

@@ -192,3 +192,85 @@ pub fn scene_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
         attributes: &SCENE_VERTEX_ATTRIBUTES,
     }
 }
+
+/// Cull modes of the pipelines [`facing_pipelines`] builds, in order.
+const CULL_MODES: [(Option<wgpu::Face>, &str); 3] =
+    [(None, ""), (Some(wgpu::Face::Back), "[cull back]"), (Some(wgpu::Face::Front), "[cull front]")];
+
+/// One raster pipeline per cull mode (none, back, front), for passes that draw solids one-sided
+/// ([`super::scene_gpu::Facing`]); `build` gets the mode and a label suffix.
+pub fn facing_pipelines<P>(mut build: impl FnMut(Option<wgpu::Face>, &str) -> P) -> Vec<P> {
+    CULL_MODES.iter().map(|&(cull, name)| build(cull, name)).collect()
+}
+
+/// The pipeline of [`facing_pipelines`] (its index and cull mode) that keeps `facing`'s faces,
+/// given whether faces toward the viewpoint come out counter-clockwise ([`toward_is_ccw`]).
+pub fn cull_mode(facing: super::scene_gpu::Facing, toward_ccw: bool) -> (usize, Option<wgpu::Face>) {
+    use super::scene_gpu::Facing;
+    // wgpu's default front face is counter-clockwise.
+    let keep_ccw = match facing {
+        Facing::Both => return (0, None),
+        Facing::Toward => toward_ccw,
+        Facing::Away => !toward_ccw,
+    };
+    if keep_ccw {
+        (1, CULL_MODES[1].0)
+    } else {
+        (2, CULL_MODES[2].0)
+    }
+}
+
+/// Whether a triangle whose winding normal `(b - a) x (c - a)` faces the viewpoint comes out
+/// counter-clockwise in `view_proj`'s normalized device coordinates. `at` is a point in front of
+/// the view and `toward` the way from it to the viewpoint (its length the distance, for a
+/// perspective view): rather than trusting a handedness convention, a small triangle there facing
+/// the viewpoint is projected and its signed area read.
+pub fn toward_is_ccw(view_proj: glam::Mat4, at: glam::Vec3, toward: glam::Vec3) -> bool {
+    let n = toward.normalize_or(glam::Vec3::Z);
+    // Two directions across n with u x v = n, a tenth of the distance long: the triangle stays in
+    // front of a perspective viewpoint.
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    let s = 0.1 * toward.length();
+    let ndc = |p: glam::Vec3| view_proj.project_point3(p).truncate();
+    let (a, b, c) = (ndc(at), ndc(at + u * s), ndc(at + v * s));
+    (b - a).perp_dot(c - a) > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat4, Vec3};
+
+    /// wgpu's front faces are counter-clockwise in normalized device coordinates (y up), and the
+    /// usual right-handed views put a face toward the viewpoint there: the probe must agree for
+    /// the camera's perspective, a cube face's reversed infinite one and the sun's orthographic
+    /// one, and flip under a mirrored view.
+    #[test]
+    fn faces_toward_the_viewpoint_come_out_counter_clockwise() {
+        let eye = Vec3::new(1.0, 2.0, 3.0);
+        let view = glam::camera::rh::view::look_to_mat4(eye, Vec3::new(0.3, -0.2, -1.0).normalize(), Vec3::Y);
+        let at = |vp: Mat4| vp.inverse().project_point3(Vec3::new(0.0, 0.0, 0.5));
+        let persp = glam::camera::rh::proj::directx::perspective(1.0, 1.5, 0.05, 100.0);
+        let vp = persp * view;
+        assert!(toward_is_ccw(vp, at(vp), eye - at(vp)));
+        let cube =
+            glam::camera::rh::proj::directx::perspective_infinite_reverse(std::f32::consts::FRAC_PI_2, 1.0, 1e-3);
+        let vp = cube * view;
+        assert!(toward_is_ccw(vp, at(vp), eye - at(vp)));
+        let ortho = glam::camera::rh::proj::directx::orthographic(-2.0, 3.0, -1.0, 4.0, 0.0, 50.0);
+        let vp = ortho * view;
+        assert!(toward_is_ccw(vp, at(vp), Vec3::new(-0.3, 0.2, 1.0)));
+        let mirrored = persp * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)) * view;
+        assert!(!toward_is_ccw(mirrored, at(mirrored), eye - at(mirrored)));
+    }
+
+    #[test]
+    fn cull_modes_keep_the_asked_faces() {
+        use super::super::scene_gpu::Facing;
+        assert_eq!(cull_mode(Facing::Both, true), (0, None));
+        assert_eq!(cull_mode(Facing::Toward, true), (1, Some(wgpu::Face::Back)));
+        assert_eq!(cull_mode(Facing::Away, true), (2, Some(wgpu::Face::Front)));
+        assert_eq!(cull_mode(Facing::Toward, false), (2, Some(wgpu::Face::Front)));
+    }
+}

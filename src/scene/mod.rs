@@ -12,6 +12,7 @@ use std::path::PathBuf;
 pub mod build;
 mod builtin;
 mod load;
+pub mod solid;
 
 pub use builtin::builtin_scene;
 pub use load::{load_scene, load_scene_with_summary, LoadSummary, SceneError};
