@@ -1,12 +1,14 @@
 // cull.wgsl: which triangles can shadow a visible point, and the balanced work list Voxelize runs.
 //
-// `cull` (one thread per triangle): the triangle's footprint in light space, i.e. the planes x
+// `cull` (one thread per run of f.table.w triangles: 1 on a GPU, 16 on a CPU): the triangle's
+// footprint in light space, i.e. the planes x
 // whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
 // conservative cell range, two ranges across the seam at phi = 0, all planes when the axis pierces
 // it) times the 32-bit words of bins whose centre z its z range holds. A triangle is dropped when
 // that footprint is empty: outside the visible wedge, past the last visible ray, or outside the
-// bins' z range (beyond the farthest visible depth that the Ranges pass found). Kept triangles
-// get a record and a work count
+// bins' z range (beyond the farthest visible depth that the Ranges pass found); so is a closed
+// mesh's face turned away from a light outside it (src/scene/solid.rs). Kept triangles get a
+// record and a work count
 //
 //   items(t) = planes(t) * words(t)          (one item = one plane x one word of one triangle)
 //
@@ -34,8 +36,9 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
 // DispatchIndirect arguments: [3..6] Voxelize, [6..9] Scan ([0..3] unused).
 @group(0) @binding(6) var<storage, read_write> dispatch: array<u32, 12>;
-// Per mesh (the first vertex's w holds a triangle's mesh): +1 keep only the faces whose winding
-// normal (b - a) x (c - a) faces the light, -1 only those facing away, 0 all (SceneGpu).
+// Per mesh (the first vertex's w holds a triangle's mesh, as a float): +1 keep only the faces
+// whose winding normal (b - a) x (c - a) faces the light, -1 only those facing away, 0 all
+// (SceneGpu::light_sides).
 @group(0) @binding(7) var<storage, read> sides: array<f32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
@@ -80,7 +83,7 @@ fn cull_one(tri: u32) -> Kept {
     // (src/scene/solid.rs). Edge-on faces (dot 0) are kept.
     k.why = 3u;
     let to_light = select(f.light.xyz, f.light.xyz - p0, is_point_light());
-    if (sides[bitcast<u32>(v0.w)] * dot(n, to_light) < 0.0) { return k; }
+    if (sides[u32(v0.w)] * dot(n, to_light) < 0.0) { return k; }
     k.why = 2u;
     let rects = triangle_rects(tri);
     if (rects.a.x >= rects.a.z) { return k; }

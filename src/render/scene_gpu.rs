@@ -57,7 +57,7 @@ pub struct SceneGpu {
     /// Per mesh, in upload order (the index buffer holds them one after the other).
     pub meshes: Vec<MeshRange>,
     /// Per triangle: its mesh (u32), for the shadow map's face culling. The triangle chunks carry
-    /// it too, in the first vertex's `w`.
+    /// it too, as the first vertex's `w` (an f32).
     pub triangle_meshes: wgpu::Buffer,
     /// Per mesh, written each frame by [`SceneGpu::write_light_sides`]: `+1` keep only triangles
     /// whose winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
@@ -91,8 +91,10 @@ impl SceneGpu {
                 triangle_meshes.push(mesh as u32);
                 for (k, &i) in t.iter().enumerate() {
                     let p = m.positions[i as usize];
-                    // The first vertex's w: the mesh (bits of a u32), for Cull's side test.
-                    let w = if k == 0 { f32::from_bits(mesh as u32) } else { 0.0 };
+                    // The first vertex's w: the mesh, for Cull's side test (a float holding an
+                    // integer, exact below 2^24 meshes: past that light_facing keeps all faces;
+                    // its bits as a u32 would be a subnormal, which a GPU may flush to zero).
+                    let w = if k == 0 { mesh as f32 } else { 0.0 };
                     tris.push([p.x, p.y, p.z, w]);
                 }
             }
@@ -163,6 +165,8 @@ impl SceneGpu {
     /// Which side of each mesh the light can see first: the solids the light lies outside of
     /// (by more than its radius; a sun is outside every mesh) keep only their faces toward it.
     pub fn light_facing(&self, light: &Light, enabled: bool) -> Vec<Facing> {
+        // Cull reads a triangle's mesh from an f32 (`SceneGpu::new`).
+        let enabled = enabled && self.meshes.len() <= 1 << 24;
         let outside = |b: &Aabb| match *light {
             Light::Point { position, radius, .. } => solid::outside(b, position, radius),
             Light::Directional { .. } => true,
