@@ -141,9 +141,10 @@ fn cull_finish() {
 var<workgroup> partial: array<u32, 256>;
 var<workgroup> block_count: u32;
 
-// Inclusive scan of `partial` over the workgroup (Hillis-Steele; 8 steps for 256).
-fn scan_partial(lid: u32) {
-    for (var step = 1u; step < 256u; step <<= 1u) {
+// Inclusive scan of `partial[0..width]` over the workgroup's first `width` threads (Hillis-Steele;
+// 8 steps for 256). `width` must be the same for every thread: the loop holds barriers.
+fn scan_partial(lid: u32, width: u32) {
+    for (var step = 1u; step < width; step <<= 1u) {
         workgroupBarrier();
         var add = 0u;
         if (lid >= step) { add = partial[lid - step]; }
@@ -158,7 +159,6 @@ fn scan_partial(lid: u32) {
 // ~175 ms at a million kept triangles in the Hillis-Steele steps' barriers.
 const LOCAL_THREADS: u32 = 64u;
 const PER_THREAD: u32 = 16u; // LOCAL_THREADS x PER_THREAD = BLOCK
-var<workgroup> partial_local: array<u32, 64>;
 
 @compute @workgroup_size(64)
 fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
@@ -172,24 +172,16 @@ fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_ind
     // Sums saturate: a list past 2^32 items is cut (counted in counters[6]) rather than wrapped.
     var sum = 0u;
     for (var i = base; i < end; i++) { sum = sat_add(sum, offsets[i]); }
-    partial_local[lid] = sum;
-    // Inclusive scan over the 64 threads (Hillis-Steele, 6 steps).
-    for (var step = 1u; step < LOCAL_THREADS; step <<= 1u) {
-        workgroupBarrier();
-        var add = 0u;
-        if (lid >= step) { add = partial_local[lid - step]; }
-        workgroupBarrier();
-        partial_local[lid] += add;
-    }
-    workgroupBarrier();
+    partial[lid] = sum;
+    scan_partial(lid, LOCAL_THREADS);
     var running = 0u;
-    if (lid > 0u) { running = partial_local[lid - 1u]; }
+    if (lid > 0u) { running = partial[lid - 1u]; }
     for (var i = base; i < end; i++) {
         let v = offsets[i];
         offsets[i] = running;
         running = sat_add(running, v);
     }
-    if (lid == LOCAL_THREADS - 1u) { blocks[wg.x] = partial_local[LOCAL_THREADS - 1u]; }
+    if (lid == LOCAL_THREADS - 1u) { blocks[wg.x] = partial[LOCAL_THREADS - 1u]; }
 }
 
 fn sat_add(a: u32, b: u32) -> u32 {
@@ -208,7 +200,7 @@ fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
         var v = 0u;
         if (start + lid < n) { v = blocks[start + lid]; }
         partial[lid] = v;
-        scan_partial(lid);
+        scan_partial(lid, 256u);
         if (start + lid < n) { blocks[start + lid] = sat_add(carry, partial[lid] - v); }
         carry = sat_add(carry, partial[255]);
         workgroupBarrier();
