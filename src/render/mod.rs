@@ -575,6 +575,9 @@ impl Renderer {
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
         let (setup, v) = self.prepare(scene, width, height, method)?;
+        if let Some(g) = self.geometry.as_mut() {
+            g.gpu.update_light_facing(&self.ctx.queue, &scene.light, self.back_face_culling);
+        }
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
         };
@@ -588,8 +591,6 @@ impl Renderer {
         }
         // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
         let g = &geometry.gpu;
-        let light_facing = g.light_facing(&scene.light, self.back_face_culling);
-        g.write_light_sides(queue, &light_facing);
         let u = &setup.uniforms;
         let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
         let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
@@ -597,7 +598,7 @@ impl Renderer {
         let ahead = 2.0 * near.max(1e-4);
         let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
         // The frame: an ordered list of passes.
-        let culling = ShadowCulling { faces: self.shadow_face_culling, light_facing: &light_facing };
+        let culling = ShadowCulling { faces: self.shadow_face_culling, light_facing: g.light_facing() };
         p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
         f.mark(Pass::ShadowMap);
         let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };

@@ -59,9 +59,11 @@ pub struct SceneGpu {
     /// Per triangle: its mesh (u32), for the shadow map's face culling. The triangle chunks carry
     /// it too, as the first vertex's `w` (an f32).
     pub triangle_meshes: wgpu::Buffer,
-    /// Per mesh, written each frame by [`SceneGpu::write_light_sides`]: `+1` keep only triangles
-    /// whose winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
+    /// Per mesh, written by [`SceneGpu::update_light_facing`]: `+1` keep only triangles whose
+    /// winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
     pub light_sides: wgpu::Buffer,
+    /// What [`SceneGpu::light_sides`] holds (`None` until first written).
+    light_facing: Option<Vec<Facing>>,
 }
 
 impl SceneGpu {
@@ -159,37 +161,46 @@ impl SceneGpu {
             meshes,
             triangle_meshes,
             light_sides,
+            light_facing: None,
         }
     }
 
     /// Which side of each mesh the light can see first: the solids the light lies outside of
     /// (by more than its radius; a sun is outside every mesh) keep only their faces toward it.
-    pub fn light_facing(&self, light: &Light, enabled: bool) -> Vec<Facing> {
+    /// Also writes [`SceneGpu::light_sides`] for the compute passes, only when it changed since the
+    /// last frame (the light or the switch moved): an unchanged frame uploads nothing.
+    pub fn update_light_facing(&mut self, queue: &wgpu::Queue, light: &Light, enabled: bool) {
         // Cull reads a triangle's mesh from an f32 (`SceneGpu::new`).
         let enabled = enabled && self.meshes.len() <= 1 << 24;
         let outside = |b: &Aabb| match *light {
             Light::Point { position, radius, .. } => solid::outside(b, position, radius),
             Light::Directional { .. } => true,
         };
-        self.meshes
+        let facing: Vec<Facing> = self
+            .meshes
             .iter()
             .map(|m| if enabled { Facing::of(m.closure, outside(&m.bounds)) } else { Facing::Both })
-            .collect()
+            .collect();
+        if self.light_facing.as_deref() != Some(facing.as_slice()) {
+            let sides: Vec<f32> = facing
+                .iter()
+                .map(|f| match f {
+                    Facing::Both => 0.0,
+                    Facing::Toward => 1.0,
+                    Facing::Away => -1.0,
+                })
+                .collect();
+            if !sides.is_empty() {
+                queue.write_buffer(&self.light_sides, 0, bytemuck::cast_slice(&sides));
+            }
+            self.light_facing = Some(facing);
+        }
     }
 
-    /// Writes [`SceneGpu::light_sides`] from [`SceneGpu::light_facing`].
-    pub fn write_light_sides(&self, queue: &wgpu::Queue, facing: &[Facing]) {
-        let sides: Vec<f32> = facing
-            .iter()
-            .map(|f| match f {
-                Facing::Both => 0.0,
-                Facing::Toward => 1.0,
-                Facing::Away => -1.0,
-            })
-            .collect();
-        if !sides.is_empty() {
-            queue.write_buffer(&self.light_sides, 0, bytemuck::cast_slice(&sides));
-        }
+    /// Per mesh, the faces the light can see first, as [`SceneGpu::update_light_facing`] last set
+    /// them.
+    pub fn light_facing(&self) -> &[Facing] {
+        self.light_facing.as_deref().unwrap_or_default()
     }
 
     /// The index ranges a raster pass draws, each with the faces it keeps ([`draw_runs`]).

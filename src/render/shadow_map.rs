@@ -71,7 +71,7 @@ struct FaceLists {
 pub struct ShadowCulling<'a> {
     /// Point light: each face draws only the triangles that can reach it.
     pub faces: bool,
-    /// Per mesh: the faces the light can see first ([`SceneGpu::light_facing`]).
+    /// Per mesh: the faces the light can see first ([`SceneGpu::update_light_facing`]).
     pub light_facing: &'a [Facing],
 }
 
@@ -380,9 +380,6 @@ impl ShadowMap {
         // Renderer::render_frame prepares every variant it records.
         let Some(pipelines) = self.pipelines.get(variant) else { return };
         let face_culling = culling.faces;
-        // The solids the light lies outside of draw only their faces toward it (the face lists
-        // of a point light already left the others out).
-        let runs = geometry.draw_runs(culling.light_facing);
         let (faces, _, count) = self.uniforms(scene);
         let culled = match (&self.face_lists, scene.light) {
             (Some(fl), Light::Point { position, .. }) if face_culling && count == 6 => {
@@ -404,6 +401,9 @@ impl ShadowMap {
             }
             _ => None,
         };
+        // Without face lists the solids the light lies outside of draw only their faces toward
+        // it, mesh runs at a time (the face lists already left the others out).
+        let runs = if culled.is_none() { geometry.draw_runs(culling.light_facing) } else { Vec::new() };
         for (i, face) in faces.iter().enumerate().take(count) {
             let (uniforms, bind_group, view) = &self.faces[i];
             queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
