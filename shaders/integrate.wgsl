@@ -13,11 +13,11 @@
 //   L = sum_j q_j (C(z_{j+1}) - C(z_j)) = sum_j C(z_j) (q_{j-1} - q_j),   C(z) = U(clamp(z, z_start, z_end)),
 //
 // plus the stretches outside the bins' range, which no caster reaches. q_j in [0, 1] is bin j's
-// lit fraction, blended bilinearly over the four grid rays around the pixel's (plane, ray)
-// coordinate (hiding the grid's planes and rays), and q_{-1} = q_B = 0. The sum runs only over the
-// bins where q changes: the union of the four rays' shadow boundaries, found with bit operations
-// per 32-bit word, so empty and fully shadowed words cost one test and the cost grows with the
-// number of shadow boundaries, not with the bins or the four rays. It sums lit light directly
+// lit fraction, blended linearly between the two planes around the pixel's angle (hiding the
+// planes) on the pixel's own ray cell, and q_{-1} = q_B = 0. The sum runs only over the bins where
+// q changes: the two rays' shadow boundaries, found with bit operations per 32-bit word, so empty
+// and fully shadowed words cost one test and the cost grows with the number of shadow boundaries,
+// not with the bins. It sums lit light directly
 // (never "total minus shadowed"), so a fully shadowed ray is exactly 0.
 //
 // Own shadow: where the light is behind the surface at the end of the ray, the thin layer of
@@ -197,27 +197,25 @@ fn cumulative(r: Ray, z: f32) -> vec3f {
     return along(zc / max(r.z_scale, 1e-12));
 }
 
-// sum_j C(z_j) (q_{j-1} - q_j) over one plane's two grid rays `bases` blended with `weights`;
-// bin j of the plane spans [z(j + offset), z(j + 1 + offset)] around its sample (bin_offset), the
-// first and the last extended to z(-1/4) and z(B + 1/4).
-fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32, last: u32) -> vec3f {
+// sum_j C(z_j) (q_{j-1} - q_j) over one plane's grid ray at `base`, q_j = 1 where bin j is lit
+// (the caller weights the plane); bin j of the plane spans [z(j + offset), z(j + 1 + offset)]
+// around its sample (bin_offset), the first and the last extended to z(-1/4) and z(B + 1/4).
+fn lit_plane(r: Ray, base: u32, offset: f32, last: u32) -> vec3f {
     var sum = vec3f(0.0);
     // q before the first bin is 0 (the stretch below the bins is added apart), which the bits see
     // as a set bit before bin 0: carry starts at 1.
-    var carry = vec2u(1u);
-    var q_prev = 0.0;
+    var carry = 1u;
     let first = u32(clamp(floor(bin_coord(f, r.z_start) - offset), 0.0, f32(f.grid.z - 1u))) / 32u;
     if (first > 0u) {
         // Every boundary before z_start has C = U(z_start) = 0: start from the previous word's last bit.
-        carry = vec2u(grid[bases.x + first - 1u], grid[bases.y + first - 1u]) >> vec2u(31u);
-        q_prev = dot(weights, vec2f(1u - carry));
+        carry = grid[base + first - 1u] >> 31u;
     }
     // Words past `last` hold bins beyond z_end only: the end term below covers them.
     for (var w = first; w <= last; w++) {
-        let b = vec2u(grid[bases.x + w], grid[bases.y + w]);
-        // Where a ray's bit differs from the one before it (bit 0 against the previous word's last).
-        var changes = (b.x ^ ((b.x << 1u) | carry.x)) | (b.y ^ ((b.y << 1u) | carry.y));
-        carry = b >> vec2u(31u);
+        let b = grid[base + w];
+        // Where the bit differs from the one before it (bit 0 against the previous word's last).
+        var changes = b ^ ((b << 1u) | carry);
+        carry = b >> 31u;
         loop {
             if (changes == 0u) { break; }
             let i = firstTrailingBit(changes);
@@ -226,22 +224,24 @@ fn lit_plane(r: Ray, bases: vec2u, weights: vec2f, offset: f32, last: u32) -> ve
             // them by its offset, the other because its sample is the nearest there).
             let j = w * 32u + i;
             let z = z_of_bin(f, select(f32(j) + offset, -0.25, j == 0u));
+            // A lit bin begins (q: 0 -> 1) where the bit is clear, a shadowed one where it is set.
+            let lit_after = ((b >> i) & 1u) == 0u;
             if (z >= r.z_end) {
-                // Every later boundary sits at z_end: the rest telescopes to C(z_end) q_prev.
-                return sum + cumulative(r, r.z_end) * q_prev;
+                // Every later boundary sits at z_end: the rest telescopes to C(z_end) times q
+                // before this boundary (1 where it starts a shadow).
+                return sum + select(vec3f(0.0), cumulative(r, r.z_end), !lit_after);
             }
-            let q = dot(weights, vec2f(1u - ((b >> vec2u(i)) & vec2u(1u))));
-            sum += cumulative(r, z) * (q_prev - q);
-            q_prev = q;
+            let c = cumulative(r, z);
+            sum += select(c, -c, lit_after);
         }
     }
     // The boundary after the last bin (C clamps it to z_end when the ray ends first).
-    return sum + cumulative(r, z_of_bin(f, f32(f.grid.z) + 0.25)) * q_prev;
+    return sum + select(vec3f(0.0), cumulative(r, z_of_bin(f, f32(f.grid.z) + 0.25)), carry == 0u);
 }
 
 // The lit part of the view ray: the stretches before and after the bins' range (no caster reaches
-// them), and both planes around the pixel.
-fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
+// them), and both planes around the pixel, on the pixel's own ray cell.
+fn lit(r: Ray, x: vec2u, bases: vec2u, weights: vec2f) -> vec3f {
     // The words holding bins of [z_start, z_end] on either plane (offsets of -1/4 and +1/4 bin).
     let top = f32(f.grid.z - 1u);
     let first = u32(clamp(floor(bin_coord(f, r.z_start) - 0.25), 0.0, top)) / 32u;
@@ -249,7 +249,7 @@ fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
     // Most rays cross no shadow at all: when no bit is set there, the whole ray is lit.
     var any = 0u;
     for (var w = first; w <= last; w++) {
-        any |= grid[bases.x + w] | grid[bases.y + w] | grid[bases.z + w] | grid[bases.w + w];
+        any |= grid[bases.x + w] | grid[bases.y + w];
     }
     if (any == 0u) { return cumulative(r, r.z_end); }
     var sum = vec3f(0.0);
@@ -258,8 +258,8 @@ fn lit(r: Ray, x: vec2u, bases: vec4u, weights: vec4f) -> vec3f {
     let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
     if (r.z_start < z_lo) { sum += cumulative(r, z_lo); }
     if (r.z_end > z_hi) { sum += cumulative(r, r.z_end) - cumulative(r, z_hi); }
-    if (weights.x + weights.z > 0.0) { sum += lit_plane(r, bases.xz, weights.xz, bin_offset(x.x), last); }
-    if (weights.y + weights.w > 0.0) { sum += lit_plane(r, bases.yw, weights.yw, bin_offset(x.y), last); }
+    if (weights.x > 0.0) { sum += weights.x * lit_plane(r, bases.x, bin_offset(x.x), last); }
+    if (weights.y > 0.0) { sum += weights.y * lit_plane(r, bases.y, bin_offset(x.y), last); }
     return sum;
 }
 
@@ -302,16 +302,14 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let t_s = surface.x;
     let back = select(0.0, surface.y, t_s >= 0.0);
 
-    // The four grid rays around the pixel and their bilinear weights.
+    // The two grid rays around the pixel and their weights. Planes are samples at their centres
+    // and blend around them. Rays are cells (voxelize.wgsl): the pixel reads its own, whose bits
+    // hold every caster up to the cell's end (inclusive scan), so it never leaks light through a
+    // closed surface and over-shadows by under one cell. Blending toward the next cell added up
+    // to one more cell of bias (docs/accuracy.md); blending backward would leak.
     let planes = f.grid.x;
     let rays = f.grid.y;
-    // Planes are samples at their centres and blend around them. Rays blend from the pixel's own
-    // row toward the *next* one only: a row's bits hold every caster up to its end (inclusive
-    // scan), the previous row's may not yet hold a caster that lies just before the pixel, so
-    // blending backward would leak light through closed surfaces. Forward blending can only
-    // over-shadow, by under one row.
     let xf = gc.x - 0.5;
-    let yf = clamp(gc.y, 0.0, f32(rays - 1u));
     let x0f = floor(xf);
     let fx = xf - x0f;
     var x0: i32 = i32(x0f);
@@ -323,16 +321,9 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         x0 = clamp(x0, 0, i32(planes) - 1);
         x1 = clamp(x1, 0, i32(planes) - 1);
     }
-    let y0 = min(u32(yf), rays - 1u);
-    let y1 = min(y0 + 1u, rays - 1u);
-    let fy = yf - f32(y0);
-    let weights = vec4f((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
-    let bases = vec4u(
-        ray_offset(f, u32(x0), y0),
-        ray_offset(f, u32(x1), y0),
-        ray_offset(f, u32(x0), y1),
-        ray_offset(f, u32(x1), y1),
-    );
+    let y = min(u32(clamp(gc.y, 0.0, f32(rays - 1u))), rays - 1u);
+    let weights = vec2f(1.0 - fx, fx);
+    let bases = vec2u(ray_offset(f, u32(x0), y), ray_offset(f, u32(x1), y));
 
     var l = vec3f(0.0);
     if (is_point_light()) {

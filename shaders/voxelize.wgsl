@@ -11,7 +11,7 @@
 // the light lies outside of, only the faces toward the light, which Cull keeps). The rays
 // y stay binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the
 // same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
-// light (Integrate blends rays forward only, so it never leaks through a closed surface).
+// light (Integrate reads the pixel's own ray cell, so it never leaks through a closed surface).
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and 32-bit word of bins; a
 // thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the

@@ -5,8 +5,8 @@
 //!
 //! with U the cumulative unshadowed in-scattering along the view ray (point light: the scatter
 //! table, `sigma_s I0 / h G`; directional: closed-form pieces of `exp(-sigma_t (l + m))`) and `q_j`
-//! bin j's lit fraction blended over the four grid rays around the pixel. Only the bins where `q`
-//! changes are visited.
+//! bin j's lit fraction blended between the two planes around the pixel, on its own ray cell. Only
+//! the bins where `q` changes are visited.
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
