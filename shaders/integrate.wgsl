@@ -17,8 +17,8 @@
 // planes) on the pixel's own ray cell, and q_{-1} = q_B = 0. The sum runs only over the bins where
 // q changes: the two rays' shadow boundaries, found with bit operations per 32-bit word, so empty
 // and fully shadowed words cost one test and the cost grows with the number of shadow boundaries,
-// not with the bins. It sums lit light directly
-// (never "total minus shadowed"), so a fully shadowed ray is exactly 0.
+// not with the bins. It sums lit light directly (never "total minus shadowed"), so a fully
+// shadowed ray is exactly 0.
 //
 // Own shadow: where the light is behind the surface at the end of the ray, the thin layer of
 // medium in front of it is in that surface's shadow, but the grid's neighbouring samples (up to a
@@ -321,7 +321,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         x0 = clamp(x0, 0, i32(planes) - 1);
         x1 = clamp(x1, 0, i32(planes) - 1);
     }
-    let y = min(u32(clamp(gc.y, 0.0, f32(rays - 1u))), rays - 1u);
+    let y = u32(clamp(gc.y, 0.0, f32(rays - 1u)));
     let weights = vec2f(1.0 - fx, fx);
     let bases = vec2u(ray_offset(f, u32(x0), y), ray_offset(f, u32(x1), y));
 

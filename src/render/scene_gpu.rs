@@ -176,12 +176,12 @@ impl SceneGpu {
             Light::Point { position, radius, .. } => solid::outside(b, position, radius),
             Light::Directional { .. } => true,
         };
-        let facing: Vec<Facing> = self
-            .meshes
-            .iter()
-            .map(|m| if enabled { Facing::of(m.closure, outside(&m.bounds)) } else { Facing::Both })
-            .collect();
-        if self.light_facing.as_deref() != Some(facing.as_slice()) {
+        let of = |m: &MeshRange| if enabled { Facing::of(m.closure, outside(&m.bounds)) } else { Facing::Both };
+        // Compared in place: an unchanged frame allocates nothing either.
+        let unchanged =
+            self.light_facing.as_ref().is_some_and(|old| old.iter().copied().eq(self.meshes.iter().map(of)));
+        if !unchanged {
+            let facing: Vec<Facing> = self.meshes.iter().map(of).collect();
             let sides: Vec<f32> = facing
                 .iter()
                 .map(|f| match f {
