@@ -78,6 +78,13 @@ fn edge_point(a: vec3f, da: f32, b: vec3f, db: f32) -> vec3f {
     return a + (b - a) * (da / (da - db));
 }
 
+// A triangle's vertices, relative to the eye.
+struct Tri {
+    p0: vec3f,
+    p1: vec3f,
+    p2: vec3f,
+}
+
 struct Segment {
     p: vec3f,
     q: vec3f,
@@ -87,29 +94,29 @@ struct Segment {
 // The segment where the plane with normal n through the eye cuts the triangle (vertices relative
 // to the eye): empty when it misses, a point when it touches a vertex, nothing for a triangle lying
 // in the plane (seen edge-on from every light ray in it; its neighbours' edges carry the surface).
-fn plane_segment(p: array<vec3f, 3>, n: vec3f) -> Segment {
-    var s = Segment(vec3f(0.0), vec3f(0.0), false);
-    let d = vec3f(dot(n, p[0]), dot(n, p[1]), dot(n, p[2]));
-    var pts: array<vec3f, 3>;
+// The points on the plane are taken in a fixed order (the vertices on it, then the crossings of
+// edges 01, 12, 20); the first and the last are the ends. Written without a private array: on
+// llvmpipe an index that differs between the lanes of a SIMD group is a gather through memory, and
+// with one here (pts[count]) the pass took three times as long on the classroom.
+fn plane_segment(t: Tri, n: vec3f) -> Segment {
+    let d0 = dot(n, t.p0);
+    let d1 = dot(n, t.p1);
+    let d2 = dot(n, t.p2);
+    var a = vec3f(0.0);
+    var b = vec3f(0.0);
     var count = 0u;
-    for (var i = 0u; i < 3u; i++) {
-        if (d[i] == 0.0) {
-            pts[count] = p[i];
-            count++;
-        }
-    }
-    for (var i = 0u; i < 3u; i++) {
-        let j = (i + 1u) % 3u;
-        if ((d[i] < 0.0 && d[j] > 0.0) || (d[i] > 0.0 && d[j] < 0.0)) {
-            pts[count] = edge_point(p[i], d[i], p[j], d[j]);
-            count++;
-        }
-    }
-    if (count == 0u || count == 3u) { return s; }
-    s.p = pts[0];
-    s.q = pts[min(count, 2u) - 1u];
-    s.ok = true;
-    return s;
+    if (d0 == 0.0) { a = t.p0; b = t.p0; count = 1u; }
+    if (d1 == 0.0) { if (count == 0u) { a = t.p1; } b = t.p1; count++; }
+    if (d2 == 0.0) { if (count == 0u) { a = t.p2; } b = t.p2; count++; }
+    if (crosses(d0, d1)) { let e = edge_point(t.p0, d0, t.p1, d1); if (count == 0u) { a = e; } b = e; count++; }
+    if (crosses(d1, d2)) { let e = edge_point(t.p1, d1, t.p2, d2); if (count == 0u) { a = e; } b = e; count++; }
+    if (crosses(d2, d0)) { let e = edge_point(t.p2, d2, t.p0, d0); if (count == 0u) { a = e; } b = e; count++; }
+    return Segment(a, b, count != 0u && count != 3u);
+}
+
+// Strictly opposite signs (not a product, which underflows to 0 for tiny distances).
+fn crosses(da: f32, db: f32) -> bool {
+    return (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0);
 }
 
 // ---- per item --------------------------------------------------------------------------------
@@ -191,13 +198,13 @@ fn main(
 }
 
 // Triangle `tri`'s vertices relative to the eye.
-fn triangle(tri: u32) -> array<vec3f, 3> {
+fn triangle(tri: u32) -> Tri {
     let e = f.eye.xyz;
-    return array<vec3f, 3>(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
+    return Tri(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
 }
 
 // Item `within` of the triangle with record `rec` (vertices p): one plane, one word of bins.
-fn voxelize_item(rec: vec4u, within: u32, p: array<vec3f, 3>) {
+fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     let words = rec.w >> 16u;
     let w = (rec.w & 0xffffu) + within % words;
     var x = rec.y + within / words;
