@@ -72,11 +72,18 @@ fn table_g(gamma: f32, psi: f32) -> vec3f {
 // sign: moving along a face, the exit toward a grazing light can shrink faster than t grows), and
 //   integral_p^t exp(-sigma_t g) = exp(-sigma_t min(g_p, g_t)) (t - p) E(sigma_t |k| (t - p)),
 // E(x) = (1 - e^-x) / x: the exponent is taken at its smaller end, so E's argument is >= 0.
+// Up to four pieces in vector lanes (index i is lane i), with no private array: on llvmpipe an
+// index that differs between the lanes of a SIMD group is a gather through memory, and this runs
+// at every shadow boundary (with arrays, sorting the cuts and picking the piece by a loop index
+// cost 10-20% of the pass on the classroom).
 struct Pieces {
-    start: array<f32, 4>,
-    g: array<f32, 4>,
-    k: array<f32, 4>,
-    cum: array<vec3f, 4>,
+    start: vec4f,
+    g: vec4f,
+    k: vec4f,
+    cum0: vec3f,
+    cum1: vec3f,
+    cum2: vec3f,
+    cum3: vec3f,
     count: u32,
 }
 
@@ -96,6 +103,29 @@ fn piece_integral(start: f32, g: f32, k: f32, t: f32) -> vec3f {
     return exp(-sigma_t * g_min) * len * one_minus_exp_over_x(sigma_t * (abs(k) * len));
 }
 
+// A breakpoint of the minimum of exits i and j (alpha + beta t) when it lies inside (t_in, t_end);
+// t_end otherwise, which sorts last and makes an empty piece.
+fn cut(ai: f32, bi: f32, aj: f32, bj: f32, t_in: f32, t_end: f32) -> vec2f {
+    let den = bi - bj;
+    if (abs(den) > 1e-12) {
+        let t = (aj - ai) / den;
+        if (t > t_in && t < t_end) { return vec2f(t, 1.0); }
+    }
+    return vec2f(t_end, 0.0);
+}
+
+// Exponent and slope of the piece [p0, p1]: the box face the light path leaves through at its
+// middle decides (constant lane indices only).
+fn piece_at(alpha: vec3f, beta: vec3f, p0: f32, p1: f32, t_in: f32) -> vec2f {
+    let ls = alpha + beta * (0.5 * (p0 + p1));
+    var al = alpha.x;
+    var be = beta.x;
+    var l = ls.x;
+    if (ls.y < l) { al = alpha.y; be = beta.y; l = ls.y; }
+    if (ls.z < l) { al = alpha.z; be = beta.z; }
+    return vec2f(max(0.0, max(0.0, al + be * p0) + p0 - t_in), be + 1.0);
+}
+
 // Builds the pieces of [t_in, t_end] along v.
 fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
     let w = safe_dir(f.light.xyz);
@@ -103,79 +133,58 @@ fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
     let bound = select(f.medium_min.xyz, f.medium_max.xyz, w > vec3f(0.0));
     let alpha = (bound - e) / w;
     let beta = -v / w;
-    // Breakpoints of the minimum inside (t_in, t_end), sorted.
-    var cuts = array<f32, 4>(t_in, t_end, t_end, t_end);
-    var n = 1u;
-    for (var i = 0u; i < 3u; i++) {
-        for (var j = i + 1u; j < 3u; j++) {
-            let den = beta[i] - beta[j];
-            if (abs(den) > 1e-12) {
-                let t = (alpha[j] - alpha[i]) / den;
-                if (t > t_in && t < t_end) {
-                    cuts[n] = t;
-                    n++;
-                }
-            }
-        }
-    }
-    // Insertion sort of the (at most three) interior cuts.
-    for (var i = 2u; i < n; i++) {
-        var k = i;
-        loop {
-            if (k <= 1u || cuts[k - 1u] <= cuts[k]) { break; }
-            let tmp = cuts[k];
-            cuts[k] = cuts[k - 1u];
-            cuts[k - 1u] = tmp;
-            k--;
-        }
-    }
-    var cum = vec3f(0.0);
-    for (var i = 0u; i < n; i++) {
-        let p0 = cuts[i];
-        let p1 = select(t_end, cuts[i + 1u], i + 1u < n);
-        // Which plane of the box the light path leaves through on this piece (at its middle).
-        let ls = alpha + beta * (0.5 * (p0 + p1));
-        var a = 0u;
-        if (ls.y < ls[a]) { a = 1u; }
-        if (ls.z < ls[a]) { a = 2u; }
-        let g = max(0.0, max(0.0, alpha[a] + beta[a] * p0) + p0 - t_in);
-        let k = beta[a] + 1.0;
-        pieces.start[i] = p0;
-        pieces.g[i] = g;
-        pieces.k[i] = k;
-        pieces.cum[i] = cum;
-        cum += piece_integral(p0, g, k, p1);
-    }
+    // Breakpoints of the minimum inside (t_in, t_end), sorted by a three-element network; the
+    // missing ones are t_end and sort last.
+    let c01 = cut(alpha.x, beta.x, alpha.y, beta.y, t_in, t_end);
+    let c02 = cut(alpha.x, beta.x, alpha.z, beta.z, t_in, t_end);
+    let c12 = cut(alpha.y, beta.y, alpha.z, beta.z, t_in, t_end);
+    var s0 = min(c01.x, c02.x);
+    var s1 = max(c01.x, c02.x);
+    let s2 = max(s1, c12.x);
+    s1 = min(s1, c12.x);
+    let lo = min(s0, s1);
+    s1 = max(s0, s1);
+    s0 = lo;
+    let n = 1u + u32(c01.y + c02.y + c12.y);
+    let start = vec4f(t_in, s0, s1, s2);
+    let end = vec4f(s0, s1, s2, t_end);
+    let q0 = piece_at(alpha, beta, start.x, end.x, t_in);
+    let q1 = piece_at(alpha, beta, start.y, end.y, t_in);
+    let q2 = piece_at(alpha, beta, start.z, end.z, t_in);
+    let q3 = piece_at(alpha, beta, start.w, end.w, t_in);
+    pieces.start = start;
+    pieces.g = vec4f(q0.x, q1.x, q2.x, q3.x);
+    pieces.k = vec4f(q0.y, q1.y, q2.y, q3.y);
+    pieces.cum0 = vec3f(0.0);
+    pieces.cum1 = piece_integral(start.x, q0.x, q0.y, end.x);
+    pieces.cum2 = pieces.cum1 + piece_integral(start.y, q1.x, q1.y, end.y);
+    pieces.cum3 = pieces.cum2 + piece_integral(start.z, q2.x, q2.y, end.z);
     pieces.count = n;
 }
 
-// integral_{t_in}^{t} (t inside [t_in, t_end]). The piece is chosen with constant indices only:
-// on llvmpipe an index that differs between the lanes of a SIMD group is a gather from memory,
-// and this runs at every shadow boundary (written as a loop it cost ~20% of the pass on the
-// classroom; a loop over a uniform index, picking the same way, still ~10%: it keeps the arrays
-// in memory).
+// integral_{t_in}^{t} (t inside [t_in, t_end]): the last piece that starts at or before t.
 fn along(t: f32) -> vec3f {
-    var start = pieces.start[0];
-    var g = pieces.g[0];
-    var k = pieces.k[0];
-    var cum = pieces.cum[0];
-    if (pieces.count > 1u && t >= pieces.start[1]) {
-        start = pieces.start[1];
-        g = pieces.g[1];
-        k = pieces.k[1];
-        cum = pieces.cum[1];
+    var start = pieces.start.x;
+    var g = pieces.g.x;
+    var k = pieces.k.x;
+    var cum = pieces.cum0;
+    if (pieces.count > 1u && t >= pieces.start.y) {
+        start = pieces.start.y;
+        g = pieces.g.y;
+        k = pieces.k.y;
+        cum = pieces.cum1;
     }
-    if (pieces.count > 2u && t >= pieces.start[2]) {
-        start = pieces.start[2];
-        g = pieces.g[2];
-        k = pieces.k[2];
-        cum = pieces.cum[2];
+    if (pieces.count > 2u && t >= pieces.start.z) {
+        start = pieces.start.z;
+        g = pieces.g.z;
+        k = pieces.k.z;
+        cum = pieces.cum2;
     }
-    if (pieces.count > 3u && t >= pieces.start[3]) {
-        start = pieces.start[3];
-        g = pieces.g[3];
-        k = pieces.k[3];
-        cum = pieces.cum[3];
+    if (pieces.count > 3u && t >= pieces.start.w) {
+        start = pieces.start.w;
+        g = pieces.g.w;
+        k = pieces.k.w;
+        cum = pieces.cum3;
     }
     return cum + piece_integral(start, g, k, t);
 }
