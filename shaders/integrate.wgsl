@@ -73,9 +73,9 @@ fn table_g(gamma: f32, psi: f32) -> vec3f {
 //   integral_p^t exp(-sigma_t g) = exp(-sigma_t min(g_p, g_t)) (t - p) E(sigma_t |k| (t - p)),
 // E(x) = (1 - e^-x) / x: the exponent is taken at its smaller end, so E's argument is >= 0.
 // Up to four pieces in vector lanes (index i is lane i), with no private array: on llvmpipe an
-// index that differs between the lanes of a SIMD group is a gather through memory, and this runs
-// at every shadow boundary (with arrays, sorting the cuts and picking the piece by a loop index
-// cost 10-20% of the pass on the classroom).
+// index that differs between the lanes of a SIMD group is a gather through memory, and even
+// arrays indexed by constants stayed in memory while another function indexed them by a loop
+// counter (the classroom's Integrate: 72 ms with arrays, 39 ms without, session 12).
 struct Pieces {
     start: vec4f,
     g: vec4f,

@@ -456,26 +456,27 @@ impl std::fmt::Display for Grid {
     }
 }
 
-/// 1024 x 512 x 512: the paper's 1024 x 1024 x 256 in the same memory (32 MiB), with the bits
-/// moved from the view rays to the light rays. A shadow's edge in the medium is placed by the
-/// planes and bins (light space); the rays only order casters before receivers along a view ray.
-/// Measured at 512x512 against the exact reference (relative RMSE of the scattered light, built-in
-/// room along VSV's own view segments):
+/// 1536 x 512 x 512 (48 MiB of bits). A shadow's edge in the medium is placed by the planes and
+/// bins (light space); the rays only order casters before receivers along a view ray. Measured at
+/// 512x512 against the exact reference (relative RMSE of the scattered light; the built-in room
+/// along VSV's own view segments), session 12:
 ///
-/// | scene | 1024x1024x256 | 1024x512x512 |
-/// |---|---:|---:|
-/// | built-in room | 1.84% | 1.21% |
-/// | Cornell box | 0.61% | 0.36% |
-/// | classroom | 2.87% | 2.16% |
-/// | bunny | 0.032% | 0.039% |
+/// | scene | 1024x1024x256 (the paper's) | 1024x512x512 | 1536x384x512 | **1536x512x512** | 2048x512x512 |
+/// |---|---:|---:|---:|---:|---:|
+/// | classroom | 2.86% | 2.13% | 1.60% | **1.58%** | 1.39% |
+/// | built-in room | | 1.05% | 1.10% | **1.01%** | |
+/// | Cornell box | | 0.34% | 0.34% | **0.33%** | 0.33% |
+/// | bunny (PSNR) | | 131.2 dB | 130.9 dB | **132.4 dB** | 132.9 dB |
 ///
-/// It is not free: twice the bins are twice Voxelize's work items and words to walk, 20-40% more
-/// GPU time on llvmpipe (the classroom 417 -> 592 ms in one bench run). Both grids lie on VSV's
-/// error-against-time curve (docs/results.md); this one is the point past the visible half-bin
-/// steps along the classroom's shafts.
+/// Until session 11 the default was 1024 x 512 x 512, the paper's grid in the same memory, chosen
+/// when Voxelize took half of a frame. Session 12 made Voxelize three times cheaper, and planes,
+/// which cost Voxelize work items, became the cheap way to error: on the classroom (llvmpipe,
+/// alternating probe runs) the frame takes ~15% longer (Voxelize 44-49 -> 64-67 ms, Scan 11 ->
+/// 16-22 ms) for a quarter less error, and no scene of the table is worse. 1536 x 384 x 512 costs
+/// the same time and is worse on the point-light scenes; 2048 planes cost Voxelize another third.
 impl Default for Grid {
     fn default() -> Self {
-        Grid { planes: 1024, rays: 512, bins: 512, spacing: BinSpacing::UniformAngle }
+        Grid { planes: 1536, rays: 512, bins: 512, spacing: BinSpacing::UniformAngle }
     }
 }
 

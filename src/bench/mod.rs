@@ -155,7 +155,7 @@ impl Point {
 }
 
 /// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, 256² / 1024² at a few bin
-/// counts, the default grid and twice its planes), the same for the Cartesian grid at fewer
+/// counts, the default grid and 1024 and 2048 planes of 512x512), the same for the Cartesian grid at fewer
 /// points, and the raymarch at 16 to 1024 steps with a 2048² shadow map plus 512² to 4096² maps at
 /// 256 steps (and a jittered point, and 512 and 1024 steps on the 4096² map). `quick`: two or
 /// three tiny points per method. [`run`] extends the
@@ -181,10 +181,16 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     for (pr, bins) in [(256, 64), (256, 256), (1024, 64), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Vsv, pr, pr, bins, map));
     }
-    // The product's default and twice its planes (half as many rays as planes: Grid::default).
+    // The product's default, the default until session 11 and twice its planes (reports of
+    // earlier sessions have both).
     let g = Grid::default();
     v.push(Point::vsv(g, map));
-    v.push(Point::vsv(Grid { planes: 2 * g.planes, ..g }, map));
+    for planes in [1024, 2048] {
+        let other = Grid { planes, rays: 512, bins: 512, ..g };
+        if other != g {
+            v.push(Point::vsv(other, map));
+        }
+    }
     for (pr, bins) in [(512, 64), (512, 256), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Cartesian, pr, pr, bins, map));
     }
