@@ -461,19 +461,21 @@ impl std::fmt::Display for Grid {
 /// 512x512 against the exact reference (relative RMSE of the scattered light; the built-in room
 /// along VSV's own view segments), session 12:
 ///
-/// | scene | 1024x1024x256 (the paper's) | 1024x512x512 | 1536x384x512 | **1536x512x512** | 2048x512x512 |
-/// |---|---:|---:|---:|---:|---:|
-/// | classroom | 2.86% | 2.13% | 1.60% | **1.58%** | 1.39% |
-/// | built-in room | | 1.05% | 1.10% | **1.01%** | |
-/// | Cornell box | | 0.34% | 0.34% | **0.33%** | 0.33% |
-/// | bunny (PSNR) | | 131.2 dB | 130.9 dB | **132.4 dB** | 132.9 dB |
+/// | scene | 1024x512x512 | 1536x384x512 | **1536x512x512** | 2048x512x512 |
+/// |---|---:|---:|---:|---:|
+/// | classroom | 2.13% | 1.60% | **1.58%** | 1.39% |
+/// | built-in room | 1.05% | 1.10% | **1.01%** | 1.00% |
+/// | Cornell box | 0.34% | 0.34% | **0.33%** | 0.33% |
+/// | bunny (PSNR) | 131.2 dB | 130.9 dB | **132.4 dB** | 132.9 dB |
 ///
-/// Until session 11 the default was 1024 x 512 x 512, the paper's grid in the same memory, chosen
-/// when Voxelize took half of a frame. Session 12 made Voxelize three times cheaper, and planes,
-/// which cost Voxelize work items, became the cheap way to error: on the classroom (llvmpipe,
-/// alternating probe runs) the frame takes ~15% longer (Voxelize 44-49 -> 64-67 ms, Scan 11 ->
-/// 16-22 ms) for a quarter less error, and no scene of the table is worse. 1536 x 384 x 512 costs
-/// the same time and is worse on the point-light scenes; 2048 planes cost Voxelize another third.
+/// Until session 11 the default was 1024 x 512 x 512, the paper's 1024 x 1024 x 256 (classroom
+/// 2.86%) in the same memory, chosen when Voxelize took half of a frame. Session 12 made Voxelize
+/// three times cheaper, and planes, which cost Voxelize work items, became the cheap way to
+/// error: on the classroom (llvmpipe, alternating probe runs) the frame takes ~15% longer
+/// (Voxelize 44-49 -> 64-67 ms, Scan 11 -> 16-22 ms) for a quarter less error, and no scene of
+/// the table is worse (of `epivox check`'s two cases at the default grid, the HG 0.999 sun lobe
+/// is: 3.9 -> 4.8%, not monotonic in the planes there). 1536 x 384 x 512 takes the same time and
+/// is worse on the built-in room and the bunny; 2048 planes cost Voxelize another third.
 impl Default for Grid {
     fn default() -> Self {
         Grid { planes: 1536, rays: 512, bins: 512, spacing: BinSpacing::UniformAngle }
