@@ -186,8 +186,8 @@ fn triangle_rects(tri: u32) -> Rects {
         // Planes are samples at their centres (x + 1/2 in plane units): the ones the arc holds,
         // widened by PLANE_MARGIN for f32 (the arc's ends come from atan2 of the vertices, the
         // voxelizer's test from the plane's own normal). None when the arc lies between two
-        // centres: most of a small triangle's cells hold no centre, and taking whole cells gave
-        // Voxelize 57% of its items on the classroom for nothing (session 12).
+        // centres. Taking every cell the arc touched gave Voxelize 3.5% more items on the
+        // classroom and 47% more on the bunny, none of which could cut the triangle (session 12).
         if ((f.image.w & FLAG_PHI_WRAPS) != 0u) {
             x0 = ceil(u0 * scale - 0.5 - PLANE_MARGIN);
             x1 = floor((u0 + len) * scale - 0.5 + PLANE_MARGIN) + 1.0;
