@@ -167,16 +167,19 @@ fn triangle_rects(tri: u32) -> Rects {
     var sx1 = 0.0;
     if (!full_phi) {
         // (the arc test below assumes the triangle subtends less than pi around the axis)
-        var ph = array<f32, 3>(phi_of_dir(f, p0 - e), phi_of_dir(f, p1 - e), phi_of_dir(f, p2 - e));
-        // sort
-        if (ph[0] > ph[1]) { let t = ph[0]; ph[0] = ph[1]; ph[1] = t; }
-        if (ph[1] > ph[2]) { let t = ph[1]; ph[1] = ph[2]; ph[2] = t; }
-        if (ph[0] > ph[1]) { let t = ph[0]; ph[0] = ph[1]; ph[1] = t; }
-        let gaps = vec3f(ph[1] - ph[0], ph[2] - ph[1], TAU - ph[2] + ph[0]);
-        var start = ph[1];
+        // The three angles sorted by a min/max network (no private array: architecture.md).
+        let q0 = phi_of_dir(f, p0 - e);
+        let q1 = phi_of_dir(f, p1 - e);
+        let q2 = phi_of_dir(f, p2 - e);
+        let m = min(max(q0, q1), q2);
+        let ph0 = min(min(q0, q1), m);
+        let ph1 = max(min(q0, q1), m);
+        let ph2 = max(max(q0, q1), q2);
+        let gaps = vec3f(ph1 - ph0, ph2 - ph1, TAU - ph2 + ph0);
+        var start = ph1;
         var len = TAU - gaps.x;
-        if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph[2]; len = TAU - gaps.y; }
-        if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph[0]; len = TAU - gaps.z; }
+        if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph2; len = TAU - gaps.y; }
+        if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph0; len = TAU - gaps.z; }
         if (len > PI - 1e-3) { full_phi = true; }
         let span = f.b2.w;
         // Arc relative to the first plane, in plane units.

@@ -894,3 +894,59 @@ mod binding_tests {
         assert_eq!(uniform, ["shadow_map.wgsl: face"]);
     }
 }
+
+#[cfg(test)]
+mod private_array_tests {
+    //! The per-item and per-pixel shaders hold no array in private or function memory
+    //! (docs/architecture.md, "No private arrays in the hot shaders"): on llvmpipe one indexed per
+    //! lane is a gather through memory, and Voxelize and Integrate ran two to three times slower
+    //! with them. Arrays in storage and workgroup memory are fine.
+    use crate::gpu::ShaderLibrary;
+
+    fn holds_array(module: &naga::Module, ty: naga::Handle<naga::Type>) -> bool {
+        match &module.types[ty].inner {
+            naga::TypeInner::Array { .. } | naga::TypeInner::BindingArray { .. } => true,
+            naga::TypeInner::Struct { members, .. } => members.iter().any(|m| holds_array(module, m.ty)),
+            _ => false,
+        }
+    }
+
+    /// `file`'s private globals and function locals that hold an array, by name.
+    fn private_arrays(file: &str) -> Vec<String> {
+        let (module, _) = ShaderLibrary::embedded().validate(file).unwrap_or_else(|e| panic!("{e}"));
+        let mut found: Vec<String> = module
+            .global_variables
+            .iter()
+            .filter(|(_, v)| v.space == naga::AddressSpace::Private && holds_array(&module, v.ty))
+            .map(|(_, v)| format!("var<private> {}", v.name.clone().unwrap_or_default()))
+            .collect();
+        let functions = module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function));
+        for func in functions {
+            for (_, local) in func.local_variables.iter() {
+                if holds_array(&module, local.ty) {
+                    found.push(format!(
+                        "{}: var {}",
+                        func.name.clone().unwrap_or_default(),
+                        local.name.clone().unwrap_or_default()
+                    ));
+                }
+            }
+        }
+        found
+    }
+
+    #[test]
+    fn the_hot_shaders_hold_no_private_array() {
+        for file in ["cull.wgsl", "voxelize.wgsl", "scan.wgsl", "integrate.wgsl"] {
+            let found = private_arrays(file);
+            assert!(found.is_empty(), "{file} holds arrays in private or function memory: {found:?}");
+        }
+    }
+
+    /// The check itself finds one: the march's private copy of the shadow-map faces holds the six
+    /// matrices (picked with constant indices only, raymarch.wgsl's `face_matrix`).
+    #[test]
+    fn a_private_array_is_found() {
+        assert!(!private_arrays("raymarch.wgsl").is_empty(), "raymarch.wgsl's `shadow` holds an array");
+    }
+}
