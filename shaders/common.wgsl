@@ -275,6 +275,15 @@ fn one_minus_exp_over_x1(x: f32) -> f32 {
     return select(direct, series, abs(x) < 0.5);
 }
 
+// v's components in ascending order, by a min/max network (no private array to sort in:
+// docs/architecture.md, "No private arrays in the hot shaders").
+fn sort3(v: vec3f) -> vec3f {
+    let lo = min(v.x, v.y);
+    let hi = max(v.x, v.y);
+    let m = min(hi, v.z);
+    return vec3f(min(lo, m), max(lo, m), max(hi, v.z));
+}
+
 // A direction with no zero component, so slab tests never compute 0 * inf.
 fn safe_dir(d: vec3f) -> vec3f {
     let s = select(vec3f(1.0), vec3f(-1.0), d < vec3f(0.0));

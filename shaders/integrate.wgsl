@@ -105,13 +105,13 @@ fn piece_integral(start: f32, g: f32, k: f32, t: f32) -> vec3f {
 
 // A breakpoint of the minimum of exits i and j (alpha + beta t) when it lies inside (t_in, t_end);
 // t_end otherwise, which sorts last and makes an empty piece.
-fn cut(ai: f32, bi: f32, aj: f32, bj: f32, t_in: f32, t_end: f32) -> vec2f {
+fn cut(ai: f32, bi: f32, aj: f32, bj: f32, t_in: f32, t_end: f32) -> f32 {
     let den = bi - bj;
     if (abs(den) > 1e-12) {
         let t = (aj - ai) / den;
-        if (t > t_in && t < t_end) { return vec2f(t, 1.0); }
+        if (t > t_in && t < t_end) { return t; }
     }
-    return vec2f(t_end, 0.0);
+    return t_end;
 }
 
 // Exponent and slope of the piece [p0, p1]: the box face the light path leaves through at its
@@ -133,21 +133,16 @@ fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
     let bound = select(f.medium_min.xyz, f.medium_max.xyz, w > vec3f(0.0));
     let alpha = (bound - e) / w;
     let beta = -v / w;
-    // Breakpoints of the minimum inside (t_in, t_end), sorted by a three-element network; the
-    // missing ones are t_end and sort last.
-    let c01 = cut(alpha.x, beta.x, alpha.y, beta.y, t_in, t_end);
-    let c02 = cut(alpha.x, beta.x, alpha.z, beta.z, t_in, t_end);
-    let c12 = cut(alpha.y, beta.y, alpha.z, beta.z, t_in, t_end);
-    var s0 = min(c01.x, c02.x);
-    var s1 = max(c01.x, c02.x);
-    let s2 = max(s1, c12.x);
-    s1 = min(s1, c12.x);
-    let lo = min(s0, s1);
-    s1 = max(s0, s1);
-    s0 = lo;
-    let n = 1u + u32(c01.y + c02.y + c12.y);
-    let start = vec4f(t_in, s0, s1, s2);
-    let end = vec4f(s0, s1, s2, t_end);
+    // Breakpoints of the minimum inside (t_in, t_end), sorted; the missing ones are t_end, sort
+    // last and are the only ones not below it.
+    let cuts = sort3(vec3f(
+        cut(alpha.x, beta.x, alpha.y, beta.y, t_in, t_end),
+        cut(alpha.x, beta.x, alpha.z, beta.z, t_in, t_end),
+        cut(alpha.y, beta.y, alpha.z, beta.z, t_in, t_end),
+    ));
+    let n = 1u + dot(vec3u(cuts < vec3f(t_end)), vec3u(1u));
+    let start = vec4f(t_in, cuts);
+    let end = vec4f(cuts, t_end);
     let q0 = piece_at(alpha, beta, start.x, end.x, t_in);
     let q1 = piece_at(alpha, beta, start.y, end.y, t_in);
     let q2 = piece_at(alpha, beta, start.z, end.z, t_in);

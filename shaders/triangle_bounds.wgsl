@@ -167,19 +167,12 @@ fn triangle_rects(tri: u32) -> Rects {
     var sx1 = 0.0;
     if (!full_phi) {
         // (the arc test below assumes the triangle subtends less than pi around the axis)
-        // The three angles sorted by a min/max network (no private array: architecture.md).
-        let q0 = phi_of_dir(f, p0 - e);
-        let q1 = phi_of_dir(f, p1 - e);
-        let q2 = phi_of_dir(f, p2 - e);
-        let m = min(max(q0, q1), q2);
-        let ph0 = min(min(q0, q1), m);
-        let ph1 = max(min(q0, q1), m);
-        let ph2 = max(max(q0, q1), q2);
-        let gaps = vec3f(ph1 - ph0, ph2 - ph1, TAU - ph2 + ph0);
-        var start = ph1;
+        let ph = sort3(vec3f(phi_of_dir(f, p0 - e), phi_of_dir(f, p1 - e), phi_of_dir(f, p2 - e)));
+        let gaps = vec3f(ph.y - ph.x, ph.z - ph.y, TAU - ph.z + ph.x);
+        var start = ph.y;
         var len = TAU - gaps.x;
-        if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph2; len = TAU - gaps.y; }
-        if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph0; len = TAU - gaps.z; }
+        if (gaps.y >= gaps.x && gaps.y >= gaps.z) { start = ph.z; len = TAU - gaps.y; }
+        if (gaps.z >= gaps.x && gaps.z >= gaps.y) { start = ph.x; len = TAU - gaps.z; }
         if (len > PI - 1e-3) { full_phi = true; }
         let span = f.b2.w;
         // Arc relative to the first plane, in plane units.

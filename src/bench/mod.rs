@@ -181,8 +181,8 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     for (pr, bins) in [(256, 64), (256, 256), (1024, 64), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Vsv, pr, pr, bins, map));
     }
-    // The product's default, the default until session 11 (1024x512x512) and twice its planes
-    // (2048x512x512): earlier sessions' reports have both.
+    // The product's default, the default until session 11 (1024x512x512) and that with twice
+    // the planes (2048x512x512): earlier sessions' reports have both.
     let g = Grid::default();
     v.push(Point::vsv(g, map));
     for planes in [1024, 2048] {
