@@ -155,12 +155,11 @@ impl Point {
 }
 
 /// The error sweep: VSV grids (bins 32 to 1024 at 512² planes x rays, 256² / 1024² at a few bin
-/// counts, the default grid and 1024 and 2048 planes of 512x512), the same for the Cartesian grid at fewer
-/// points, and the raymarch at 16 to 1024 steps with a 2048² shadow map plus 512² to 4096² maps at
-/// 256 steps (and a jittered point, and 512 and 1024 steps on the 4096² map). `quick`: two or
-/// three tiny points per method. [`run`] extends the
-/// march to 2048 and 4096 steps on the 4096² map while none of these is as accurate as VSV's
-/// default grid.
+/// counts, the default grid, 1024 and 2048 planes of 512x512 and the finer 2048x512x768), the
+/// same for the Cartesian grid at fewer points, and the raymarch at 16 to 1024 steps with a 2048²
+/// shadow map plus 512² to 4096² maps at 256 steps (and a jittered point, and 512 and 1024 steps
+/// on the 4096² map). `quick`: two or three tiny points per method. [`run`] then extends the march
+/// on the [`CHASE_MAPS`] while it is less accurate than VSV's most accurate grid.
 pub fn error_sweep(quick: bool) -> Vec<Point> {
     use Method::{Cartesian, Vsv};
     if quick {
@@ -185,8 +184,10 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     // the planes (2048x512x512): earlier sessions' reports have both.
     let g = Grid::default();
     v.push(Point::vsv(g, map));
-    for planes in [1024, 2048] {
-        let other = Grid { planes, rays: 512, bins: 512, ..g };
+    // Finer than the default: where VSV's error goes below the 4096² map's limit (1.1% on the
+    // classroom), the march needs the 8192² map to keep up (CHASE_MAPS).
+    for (planes, bins) in [(1024, 512), (2048, 512), (2048, 768)] {
+        let other = Grid { planes, rays: 512, bins, ..g };
         if other != g {
             v.push(Point::vsv(other, map));
         }
@@ -206,9 +207,51 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     v
 }
 
-/// The baseline's map and step limit when the sweep is extended to reach VSV's default error.
-pub const CHASE_MAP: u32 = 4096;
+/// The baseline's maps, in order, when the sweep is extended to reach VSV's error: on each the
+/// march's steps double from the sweep's most accurate point on that map (from
+/// [`CHASE_FIRST_STEPS`] on a map the sweep lacks) up to [`CHASE_MAX_STEPS`], until it is as
+/// accurate or stops improving (the map's own limit); then the next, finer map.
+pub const CHASE_MAPS: [u32; 2] = [4096, 8192];
+pub const CHASE_FIRST_STEPS: u32 = 1024;
 pub const CHASE_MAX_STEPS: u32 = 4096;
+
+/// The march the chase measures next, or `None` once a march of `rows` is as accurate as their
+/// most accurate VSV point or every map in `maps` is spent. On each map in turn the steps double
+/// from the map's finest march (from [`CHASE_FIRST_STEPS`] on a map without one) up to
+/// [`CHASE_MAX_STEPS`]; a map is spent there, or once doubling the steps lowered the error by
+/// less than 2% (its texels are then the limit).
+pub fn next_chase_point(rows: &[Row], maps: &[u32]) -> Option<Point> {
+    let best = |method: fn(&Method) -> bool| {
+        rows.iter().filter(|r| method(&r.point.method)).map(|r| r.scatter.rel_rmse).min_by(|a, b| a.total_cmp(b))
+    };
+    let target = best(|m| *m == Method::Vsv)?;
+    let march = best(|m| matches!(m, Method::Raymarch { jitter: false, .. }));
+    if march.is_some_and(|e| e <= target) {
+        return None;
+    }
+    for &map in maps {
+        // (steps, error) of the plain marches on this map.
+        let on: Vec<(u32, f64)> = rows
+            .iter()
+            .filter(|r| r.point.shadow_map == map)
+            .filter_map(|r| match r.point.method {
+                Method::Raymarch { steps, jitter: false } => Some((steps, r.scatter.rel_rmse)),
+                _ => None,
+            })
+            .collect();
+        let Some(&(top, e_top)) = on.iter().max_by_key(|(steps, _)| *steps) else {
+            return Some(Point::march(CHASE_FIRST_STEPS, map, false));
+        };
+        if top >= CHASE_MAX_STEPS {
+            continue;
+        }
+        if on.iter().any(|&(steps, e)| steps == top / 2 && e_top >= 0.98 * e) {
+            continue;
+        }
+        return Some(Point::march(top * 2, map, false));
+    }
+    None
+}
 
 /// The two settings the scaling sweeps time: [`PAPER_GRID`] and a 256-step march.
 pub fn scaling_points(quick: bool) -> [Point; 2] {
@@ -536,7 +579,7 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     // The most accurate scattered-light image of each method, for a look beside the reference.
     let mut best: Vec<(&'static str, f64, crate::image::Image)> = Vec::new();
     let mut first_failure = None;
-    let chase_map = CHASE_MAP.min(renderer.ctx.device.limits().max_texture_dimension_2d);
+    let max_map = renderer.ctx.device.limits().max_texture_dimension_2d;
     let timestamps = renderer.ctx.timestamps;
     let mut measure_point = |p: &Point,
                              frames: usize,
@@ -572,32 +615,18 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
     for p in &points {
         measure_point(p, opts.frames, &mut rows, &mut timed, &mut notes)?;
     }
-    // Equal error needs a baseline point as accurate as VSV's default grid: while the sweep has
-    // none, double the most accurate march's steps on the largest map (up to CHASE_MAX_STEPS),
-    // as long as that still lowers its error (a map-limited march does not get better).
+    // Equal error needs a baseline point as accurate as each VSV point: while the sweep has none
+    // for the most accurate one, refine the march on the chase maps in turn.
     if !opts.quick {
-        let default_grid = Point::vsv(Grid::default(), crate::params::Baseline::default().shadow_map);
-        let target = rows.iter().find(|r| r.point == default_grid).map(|r| r.scatter.rel_rmse);
-        let march_best = |rows: &[Row]| {
-            rows.iter()
-                .filter(|r| {
-                    matches!(r.point.method, Method::Raymarch { jitter: false, .. }) && r.point.shadow_map == chase_map
-                })
-                .min_by(|a, b| a.scatter.rel_rmse.total_cmp(&b.scatter.rel_rmse))
-                .map(|r| (r.point, r.scatter.rel_rmse))
-        };
-        while let (Some(target), Some((p, err))) = (target, march_best(&rows)) {
-            let Method::Raymarch { steps, .. } = p.method else { break };
-            if err <= target || steps >= CHASE_MAX_STEPS {
-                break;
-            }
+        let mut maps: Vec<u32> = CHASE_MAPS.iter().map(|&m| m.min(max_map)).collect();
+        maps.dedup();
+        while let Some(p) = next_chase_point(&rows, &maps) {
             bar.inc_length(1);
+            let before = rows.len();
             // These take seconds a frame: three are enough for a median.
-            let p = Point::march(steps * 2, chase_map, false);
             measure_point(&p, opts.frames.min(3), &mut rows, &mut timed, &mut notes)?;
-            match march_best(&rows) {
-                Some((_, e)) if e < 0.98 * err => {}
-                _ => break,
+            if rows.len() == before {
+                break; // it failed (noted): a finer march would fail too
             }
         }
     }
@@ -794,6 +823,37 @@ mod tests {
         assert_eq!((&better.baseline, better.ratio), (&None, None));
         assert_eq!(better.most_accurate, Some(("256 steps, map 4096".to_string(), 100.0, 0.03, 4.0)));
         assert!(better.describe().contains("no raymarch point as accurate; the most accurate"));
+    }
+
+    #[test]
+    fn the_chase_refines_the_march_map_by_map_until_it_is_as_accurate() {
+        let maps = [4096, 8192];
+        let vsv = row(Point::grid(Method::Vsv, 2048, 512, 768, 2048), 270.0, 0.0099);
+        let mut rows = vec![
+            vsv.clone(),
+            row(Point::march(512, 4096, false), 520.0, 0.0163),
+            row(Point::march(1024, 4096, false), 900.0, 0.01235),
+            // A jittered or coarser-map march never counts toward the chase.
+            row(Point::march(4096, 2048, true), 3000.0, 0.02),
+        ];
+        assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(2048, 4096, false)));
+        rows.push(row(Point::march(2048, 4096, false), 1800.0, 0.0116));
+        assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(4096, 4096, false)));
+        // 4096 steps: the step limit, so the finer map starts at CHASE_FIRST_STEPS.
+        rows.push(row(Point::march(4096, 4096, false), 3300.0, 0.0113));
+        assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(1024, 8192, false)));
+        rows.push(row(Point::march(1024, 8192, false), 1150.0, 0.00976));
+        assert_eq!(next_chase_point(&rows, &maps), None, "as accurate as VSV: done");
+        // A map whose doubled steps gain under 2% is spent; with no finer map the chase ends.
+        let limited = vec![
+            vsv.clone(),
+            row(Point::march(1024, 4096, false), 900.0, 0.0124),
+            row(Point::march(2048, 4096, false), 1800.0, 0.0123),
+        ];
+        assert_eq!(next_chase_point(&limited, &[4096]), None);
+        assert_eq!(next_chase_point(&limited, &maps), Some(Point::march(1024, 8192, false)));
+        // Nothing to chase without a VSV point.
+        assert_eq!(next_chase_point(&limited[1..], &maps), None);
     }
 
     #[test]
