@@ -64,12 +64,21 @@ struct Frame {
     grid: vec4u,
     // image width, height, unused (the phase function is the PHASE override), flags.
     image: vec4u,
-    // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); Voxelize's
-    // work items per thread (voxelize.wgsl).
+    // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); unused.
     table: vec4u,
+    // Voxelize's work list (cull.wgsl, voxelize.wgsl): work items per thread, 32-bit words of bins
+    // per item; zw unused.
+    work: vec4u,
 }
 
 fn is_point_light() -> bool { return POINT_LIGHT; }
+
+// Voxelize's work items for a triangle's `words` words of bins in one plane: groups of
+// f.work.y words.
+fn word_groups(f: Frame, words: u32) -> u32 {
+    let per = max(f.work.y, 1u);
+    return (words + per - 1u) / per;
+}
 
 // ---- pixels --------------------------------------------------------------------------------
 

@@ -1,6 +1,6 @@
 // cull.wgsl: which triangles can shadow a visible point, and the balanced work list Voxelize runs.
 //
-// `cull` (one thread per run of f.table.w triangles: 1 on a GPU, 16 on a CPU): the triangle's
+// `cull` (one thread per run of f.work.x triangles: 1 on a GPU, 16 on a CPU): the triangle's
 // footprint in light space, i.e. the planes x
 // whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
 // conservative cell range, two ranges across the seam at phi = 0, all planes when the axis pierces
@@ -10,11 +10,14 @@
 // mesh's face turned away from a light outside it (src/scene/solid.rs). Kept triangles get a
 // record and a work count
 //
-//   items(t) = planes(t) * words(t)          (one item = one plane x one word of one triangle)
+//   items(t) = planes(t) * ceil(words(t) / f.work.y)
+//
+// (one item = one plane x a group of f.work.y words of one triangle: one word on a GPU, all of
+// them on a CPU, src/render/voxelize.rs).
 //
 // `offsets_local` and `offsets_blocks` turn the counts into exclusive prefix sums (1024 per
 // workgroup, then the block sums in one workgroup), and `offsets_blocks` writes Voxelize's
-// indirect dispatch for the total: every item (or run of f.table.w items, Voxelize) gets one
+// indirect dispatch for the total: every item (or run of f.work.x items, Voxelize) gets one
 // thread, so a wall that covers every plane is spread over thousands of threads and a sliver costs
 // one or two.
 
@@ -98,11 +101,11 @@ fn cull_one(tri: u32) -> Kept {
     nx = min(nx, f.grid.x);
     k.why = 0u;
     k.record = vec4u(tri, x0, nx, words.x | (words.y << 16u));
-    k.items = nx * words.y;
+    k.items = nx * word_groups(f, words.y);
     return k;
 }
 
-// A thread culls a run of f.table.w consecutive triangles (16 on a CPU, 1 on a GPU; Voxelize's
+// A thread culls a run of f.work.x consecutive triangles (16 on a CPU, 1 on a GPU; Voxelize's
 // run of items): on a CPU adapter a workgroup's start-up and the parameters' copy cost as much as
 // culling a triangle.
 @compute @workgroup_size(64)
@@ -111,7 +114,7 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     // Meshes past the adapter's largest binding come in chunks: `tris` is this chunk's, and the
     // records hold indices into it.
     let count = arrayLength(&tris) / 3u;
-    let run = max(f.table.w, 1u);
+    let run = max(f.work.x, 1u);
     let first = (id.x + id.y * groups.x * 64u) * run;
     let last = min(first + run, count);
     var culled = vec3u(0u);
@@ -207,8 +210,8 @@ fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
     }
     if (lid == 0u) {
         // A saturated total cannot be told from a true one: cap the list below it and count what is cut.
-        // Voxelize's threads take runs of f.table.w items (at least 1).
-        let per_group = VOXEL_GROUP * max(f.table.w, 1u);
+        // Voxelize's threads take runs of f.work.x items (at least 1).
+        let per_group = VOXEL_GROUP * max(f.work.x, 1u);
         let total = min(carry, 0xffffffffu - per_group);
         if (carry == 0xffffffffu) { atomicAdd(&counters[6], 1u); }
         atomicStore(&counters[3], total);

@@ -13,8 +13,9 @@
 // same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
 // light (Integrate reads the pixel's own ray cell, so it never leaks through a closed surface).
 //
-// Work comes from the Cull pass's list, one item per triangle, plane and 32-bit word of bins; a
-// thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the
+// Work comes from the Cull pass's list, one item per triangle, plane and group of f.work.y 32-bit
+// words of bins (one word on a GPU, all of them on a CPU, where a plane's set-up costs more than
+// its bins); a thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the
 // triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are both
 // monotonic, so the bins whose centre z lies in the segment's z range are exactly the light rays
 // that hit it, and the hit of each follows in closed form.
@@ -136,31 +137,34 @@ fn cartesian_cell(q: vec3f) -> i32 {
 }
 
 var<private> run_cell: i32;
+var<private> run_word: u32;
 var<private> run_mask: u32;
 
-fn flush(x: u32, w: u32) {
+fn flush(x: u32) {
     if (run_mask != 0u && run_cell >= 0) {
-        atomicOr(&grid[ray_offset(f, x, u32(run_cell)) + w], run_mask);
+        atomicOr(&grid[ray_offset(f, x, u32(run_cell)) + run_word], run_mask);
     }
     run_mask = 0u;
 }
 
-// Adds bin k's hit in cell y to the run of equal cells; a run becomes one atomic OR.
-fn mark(x: u32, w: u32, k: u32, y: i32) {
-    if (y != run_cell) {
-        flush(x, w);
+// Adds bin k's hit in cell y to the run of equal cells in one word; a run becomes one atomic OR.
+fn mark(x: u32, k: u32, y: i32) {
+    let w = k / 32u;
+    if (y != run_cell || w != run_word) {
+        flush(x);
         run_cell = y;
+        run_word = w;
     }
     run_mask |= 1u << (k - w * 32u);
 }
 
-// Bins whose sample z (k + 1/2 + offset) lies in [z0, z1] (either order), within word w:
-// (first, last), empty when first > last.
-fn bins_in(z0: f32, z1: f32, w: u32, offset: f32) -> vec2i {
+// Bins whose sample z (k + 1/2 + offset) lies in [z0, z1] (either order), within words w.x to
+// w.y: (first, last), empty when first > last.
+fn bins_in(z0: f32, z1: f32, w: vec2u, offset: f32) -> vec2i {
     let c0 = bin_coord(f, min(z0, z1)) - 0.5 - offset;
     let c1 = bin_coord(f, max(z0, z1)) - 0.5 - offset;
-    let lo = max(ceil(c0), f32(w * 32u));
-    let hi = min(floor(c1), f32(w * 32u + 31u));
+    let lo = max(ceil(c0), f32(w.x * 32u));
+    let hi = min(floor(c1), f32(w.y * 32u + 31u));
     if (!(lo <= hi)) { return vec2i(1, 0); } // also NaN
     return vec2i(i32(lo), i32(hi));
 }
@@ -176,7 +180,7 @@ fn main(
     // A run of `run` consecutive items (the renderer's choice per adapter, cull.wgsl sizes the
     // dispatch by it): one search for the first, then the list is walked. A triangle's items are
     // consecutive, so its record and vertices are read once per run.
-    let run = max(f.table.w, 1u);
+    let run = max(f.work.x, 1u);
     let first = ((wg.y * groups.x + wg.x) * 64u + lid) * run;
     if (first >= total) { return; }
     let found = find_item(first);
@@ -186,7 +190,7 @@ fn main(
     var p = triangle(rec.x);
     let last = first + min(run, total - first);
     for (var item = first; item < last; item++) {
-        if (within == rec.z * (rec.w >> 16u)) {
+        if (within == rec.z * word_groups(f, rec.w >> 16u)) {
             slot++;
             within = 0u;
             rec = records[slot];
@@ -203,13 +207,17 @@ fn triangle(tri: u32) -> Tri {
     return Tri(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
 }
 
-// Item `within` of the triangle with record `rec` (vertices p): one plane, one word of bins.
+// Item `within` of the triangle with record `rec` (vertices p): one plane, a group of words of
+// bins (first and last, w).
 fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     let words = rec.w >> 16u;
-    let w = (rec.w & 0xffffu) + within % words;
-    var x = rec.y + within / words;
+    let groups = word_groups(f, words);
+    let first = (rec.w & 0xffffu) + (within % groups) * max(f.work.y, 1u);
+    let w = vec2u(first, min(first + max(f.work.y, 1u), (rec.w & 0xffffu) + words) - 1u);
+    var x = rec.y + within / groups;
     if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
     run_cell = -1;
+    run_word = 0xffffffffu;
     run_mask = 0u;
     let offset = bin_offset(x);
 
@@ -229,9 +237,9 @@ fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
                 let t = clamp((z_of_bin(f, f32(k) + 0.5 + offset) - z0) / (z1 - z0), 0.0, 1.0);
                 q = s.p + (s.q - s.p) * t;
             }
-            mark(x, w, u32(k), cartesian_cell(q));
+            mark(x, u32(k), cartesian_cell(q));
         }
-        flush(x, w);
+        flush(x);
         return;
     }
 
@@ -290,7 +298,7 @@ fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
             // Light ray v = zk.
             q = pa + dp * clamp((zk - z0) / (z1 - z0), 0.0, 1.0);
         }
-        mark(x, w, u32(k), ray_cell(atan2(q.y, q.x)));
+        mark(x, u32(k), ray_cell(atan2(q.y, q.x)));
     }
-    flush(x, w);
+    flush(x);
 }

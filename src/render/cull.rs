@@ -4,8 +4,9 @@
 //! A triangle outside the visible wedge of planes, past the last visible ray, or outside the bins'
 //! z range is dropped, and so is a closed mesh's face turned away from a light outside it (its
 //! light rays enter the solid through a face toward the light first, and the scan shadows all
-//! behind that). A kept one gets a record and `items = planes x words`, the light-space
-//! samples it may cover in units of one plane x one 32-bit word of bins; an exclusive prefix sum
+//! behind that). A kept one gets a record and `items = planes x ceil(words / words per item)`,
+//! the light-space samples it may cover in units of one plane x a group of 32-bit words of bins
+//! ([`super::Voxelize::words_per_item`]: one on a GPU, all on a CPU); an exclusive prefix sum
 //! over the items (1024 per workgroup, then the blocks) lets Voxelize give every item its own
 //! thread through an indirect dispatch. Scan's indirect dispatch is empty when nothing is kept, so
 //! an empty frame costs nothing.
@@ -40,7 +41,7 @@ pub struct CullCounts {
     /// Dropped: a face of a closed mesh turned away from the light, which lies outside it
     /// (`crate::scene::solid`); the light meets that solid through its faces toward it first.
     pub culled_back: u32,
-    /// Voxelize's work items (one triangle x one plane x one 32-bit word of bins).
+    /// Voxelize's work items (one triangle x one plane x a group of 32-bit words of bins).
     pub items: u64,
 }
 
@@ -163,7 +164,7 @@ impl Cull {
     }
 
     /// Culls chunk `chunk` of the scene's triangles and builds its work list; each thread takes
-    /// `per_thread` consecutive triangles (the frame uniforms' `table.w`, Voxelize's run).
+    /// `per_thread` consecutive triangles (the frame uniforms' `work.x`, Voxelize's run).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, variant: Variant, chunk: usize, per_thread: u32) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some([cull, finish, local, blocks]), Some((bind_group, triangles))) =

@@ -46,8 +46,11 @@ pub struct FrameUniforms {
     /// Image width and height, unused, flags (`FLAG_*`).
     pub image: UVec4,
     /// Scatter-table rows and columns, the Cartesian grid's light axis (0 +right, 1 -right, 2 +up,
-    /// 3 -up), Voxelize's work items per thread (the renderer sets it: [`super::Voxelize`]).
+    /// 3 -up); `w` unused.
     pub table: UVec4,
+    /// Voxelize's work list: items per thread and 32-bit words of bins per item (the renderer sets
+    /// them per adapter: [`super::Voxelize`]); `zw` unused.
+    pub work: UVec4,
 }
 
 /// Everything derived from the scene for one frame on the CPU.
@@ -207,7 +210,8 @@ impl FrameSetup {
             medium_max: mb.max.extend(0.0),
             grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
             image: UVec4::new(width, height, 0, flags),
-            table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 1),
+            table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
+            work: UVec4::new(1, 1, 0, 0),
         };
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
     }

@@ -294,8 +294,9 @@ impl Renderer {
     /// parse or validate, or a pipeline wgpu refuses — the old pipelines stay and keep rendering.
     pub fn reload(&mut self, lib: &ShaderLibrary) -> Result<(), GpuError> {
         let mut passes = Passes::new(&self.ctx, lib, self.passes.shadow_map.size)?;
-        // A run length set with set_voxelize_items_per_thread survives the reload.
+        // The work list's shape set with set_voxelize_work survives the reload.
         passes.voxelize.items_per_thread = self.passes.voxelize.items_per_thread;
+        passes.voxelize.words_per_item = self.passes.voxelize.words_per_item;
         // Build what the current picture needs now, so that a shader wgpu refuses for this variant
         // fails here, with the old pipelines still in place.
         if let Some(v) = self.variant {
@@ -546,7 +547,8 @@ impl Renderer {
             }));
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
-        setup.uniforms.table.w = self.passes.voxelize.items_per_thread;
+        let v = &self.passes.voxelize;
+        setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, 0, 0);
         let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
@@ -707,11 +709,12 @@ impl Renderer {
             .collect())
     }
 
-    /// Voxelize's work items per thread (at least 1; the adapter's choice until set:
-    /// [`Voxelize::items_per_thread`]; kept across [`Renderer::reload`]). Any value gives the
-    /// same grid; tests compare them.
-    pub fn set_voxelize_items_per_thread(&mut self, items: u32) {
-        self.passes.voxelize.items_per_thread = items.max(1);
+    /// Voxelize's work items per thread and 32-bit words of bins per item (each at least 1; the
+    /// adapter's choice until set: [`Voxelize::items_per_thread`], [`Voxelize::words_per_item`];
+    /// kept across [`Renderer::reload`]). Any values give the same grid; tests compare them.
+    pub fn set_voxelize_work(&mut self, items_per_thread: u32, words_per_item: u32) {
+        self.passes.voxelize.items_per_thread = items_per_thread.max(1);
+        self.passes.voxelize.words_per_item = words_per_item.max(1);
     }
 
     /// The shadow volume of the last frame, `planes x rays x words` words (plane-major: ray
@@ -786,7 +789,7 @@ mod layout_tests {
             "scan.wgsl",
             "Frame",
             fields!(FrameUniforms: cam_right, cam_up, cam_fwd, eye, view_proj, light, light_power, axis, b1, b2,
-                sigma_s, sigma_t, ranges, medium_min, medium_max, grid, image, table),
+                sigma_s, sigma_t, ranges, medium_min, medium_max, grid, image, table, work),
             size_of::<FrameUniforms>(),
         );
     }
