@@ -456,29 +456,32 @@ impl std::fmt::Display for Grid {
     }
 }
 
-/// 1536 x 512 x 512 (48 MiB of bits). A shadow's edge in the medium is placed by the planes and
+/// 2048 x 512 x 768 (96 MiB of bits). A shadow's edge in the medium is placed by the planes and
 /// bins (light space); the rays only order casters before receivers along a view ray. Measured at
 /// 512x512 against the exact reference (relative RMSE of the scattered light; the built-in room
-/// along VSV's own view segments), session 12:
+/// along VSV's own view segments; the classroom's frame on llvmpipe, one process, two rounds),
+/// session 13:
 ///
-/// | scene | 1024x512x512 | 1536x384x512 | **1536x512x512** | 2048x512x512 |
+/// | scene | 1536x512x512 | 1536x512x768 | 2048x384x768 | **2048x512x768** |
 /// |---|---:|---:|---:|---:|
-/// | classroom | 2.13% | 1.60% | **1.58%** | 1.39% |
-/// | built-in room | 1.05% | 1.10% | **1.01%** | 1.00% |
-/// | Cornell box | 0.34% | 0.34% | **0.33%** | 0.33% |
-/// | bunny (PSNR) | 131.2 dB | 130.9 dB | **132.4 dB** | 132.9 dB |
+/// | classroom | 1.58% | 1.26% | 1.01% | **0.99%** |
+/// | built-in room | 1.01% | 0.78% | 0.90% | **0.80%** |
+/// | Cornell box | 0.33% | 0.24% | 0.25% | **0.24%** |
+/// | bunny (PSNR) | 132.4 dB | 132.7 dB | 131.3 dB | **133.2 dB** |
+/// | classroom frame | 192-199 ms | 211-231 ms | | **239-251 ms** |
 ///
-/// Until session 11 the default was 1024 x 512 x 512, the paper's 1024 x 1024 x 256 (classroom
-/// 2.86%) in the same memory, chosen when Voxelize took half of a frame. Session 12 made Voxelize
-/// three times cheaper, and planes, which cost Voxelize work items, became the cheap way to
-/// error: on the classroom (llvmpipe, alternating probe runs) the frame takes ~15% longer
-/// (Voxelize 44-49 -> 64-67 ms, Scan 11 -> 16-22 ms) for a quarter less error, and no scene of
-/// the table is worse (of `epivox check`'s two cases at the default grid, the HG 0.999 sun lobe
-/// is: 3.9 -> 4.8%, not monotonic in the planes there). 1536 x 384 x 512 takes the same time and
-/// is worse on the built-in room and the bunny; 2048 planes cost Voxelize another third.
+/// Until session 12 the default was 1536 x 512 x 512 (and 1024 x 512 x 512 until session 11, the
+/// paper's 1024 x 1024 x 256 before that), chosen while Voxelize cost a plane's segment per word of
+/// bins. Since Voxelize walks a plane's words in one item on a CPU adapter (session 13), bins cost
+/// it a quarter less, and 2048 planes of 768 bins take a quarter more frame time for a third less
+/// error on the classroom and a fifth to a quarter less on the other scenes; the march needs its
+/// 8192 map to match it (docs/results.md). Of `epivox check`'s two cases at the default grid, the
+/// eye in shadow behind the axis goes 1.39 -> 1.00% and the HG 0.999 sun lobe 4.78 -> 2.80%. Fewer
+/// rays (2048 x 384 x 768) cost the built-in room and the bunny; 1536 x 512 x 768 is the cheaper
+/// middle (72 MiB).
 impl Default for Grid {
     fn default() -> Self {
-        Grid { planes: 1536, rays: 512, bins: 512, spacing: BinSpacing::UniformAngle }
+        Grid { planes: 2048, rays: 512, bins: 768, spacing: BinSpacing::UniformAngle }
     }
 }
 
