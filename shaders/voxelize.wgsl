@@ -15,10 +15,10 @@
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and group of f.work.y 32-bit
 // words of bins (one word on a GPU, all of them on a CPU, where a plane's set-up costs more than
-// its bins); a thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane, the
-// triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are both
-// monotonic, so the bins whose centre z lies in the segment's z range are exactly the light rays
-// that hit it, and the hit of each follows in closed form.
+// its bins); a thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane,
+// the triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are
+// both monotonic, so the bins whose centre z lies in the segment's z range are exactly the light
+// rays that hit it, and the hit of each follows in closed form.
 //
 // Watertight: a crossing on an edge is computed from the edge's two vertices in a canonical order,
 // so the two triangles that share the edge get the same point bit for bit; a vertex on the plane is
@@ -212,8 +212,9 @@ fn triangle(tri: u32) -> Tri {
 fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     let words = rec.w >> 16u;
     let groups = word_groups(f, words);
-    let first = (rec.w & 0xffffu) + (within % groups) * max(f.work.y, 1u);
-    let w = vec2u(first, min(first + max(f.work.y, 1u), (rec.w & 0xffffu) + words) - 1u);
+    let per = max(f.work.y, 1u);
+    let first = (rec.w & 0xffffu) + (within % groups) * per;
+    let w = vec2u(first, min(first + per, (rec.w & 0xffffu) + words) - 1u);
     var x = rec.y + within / groups;
     if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
     run_cell = -1;
