@@ -73,10 +73,14 @@ struct Frame {
 
 fn is_point_light() -> bool { return POINT_LIGHT; }
 
-// Voxelize's work items for a triangle's `words` words of bins in one plane: groups of
-// f.work.y words.
+// 32-bit words of bins per Voxelize work item (at least 1).
+fn words_per_item(f: Frame) -> u32 {
+    return max(f.work.y, 1u);
+}
+
+// Voxelize's work items for a triangle's `words` words of bins in one plane.
 fn word_groups(f: Frame, words: u32) -> u32 {
-    let per = max(f.work.y, 1u);
+    let per = words_per_item(f);
     return (words + per - 1u) / per;
 }
 

@@ -212,7 +212,7 @@ fn triangle(tri: u32) -> Tri {
 fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     let words = rec.w >> 16u;
     let groups = word_groups(f, words);
-    let per = max(f.work.y, 1u);
+    let per = words_per_item(f);
     let first = (rec.w & 0xffffu) + (within % groups) * per;
     let w = vec2u(first, min(first + per, (rec.w & 0xffffu) + words) - 1u);
     var x = rec.y + within / groups;

@@ -180,12 +180,12 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     for (pr, bins) in [(256, 64), (256, 256), (1024, 64), (1024, 256), (1024, 1024)] {
         v.push(Point::grid(Vsv, pr, pr, bins, map));
     }
-    // The product's default and the earlier sessions' (their reports have them).
+    // The product's default, the defaults until sessions 11 and 12 (1024 and 1536 x 512 x 512),
+    // 2048 planes of 512 bins and the default since session 13 (2048x512x768), each once: the
+    // earlier reports have them. 2048x512x768's error is below the 4096² map's limit (1.1% on the
+    // classroom), so the march needs the 8192² map to keep up (CHASE_MAPS).
     let g = Grid::default();
     v.push(Point::vsv(g, map));
-    // The defaults until sessions 11 and 12 (1024 and 1536 x 512 x 512), 2048 planes of 512 bins and
-    // the default since session 13 (2048x512x768): its error is below the 4096² map's limit (1.1%
-    // on the classroom), so the march needs the 8192² map to keep up (CHASE_MAPS).
     for (planes, bins) in [(1024, 512), (1536, 512), (2048, 512), (2048, 768)] {
         let other = Grid { planes, rays: 512, bins, ..g };
         if other != g {
@@ -833,7 +833,7 @@ mod tests {
             vsv.clone(),
             row(Point::march(512, 4096, false), 520.0, 0.0163),
             row(Point::march(1024, 4096, false), 900.0, 0.01235),
-            // A jittered or coarser-map march never counts toward the chase.
+            // A jittered march never counts toward the chase (nor is it a map to refine).
             row(Point::march(4096, 2048, true), 3000.0, 0.02),
         ];
         assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(2048, 4096, false)));
