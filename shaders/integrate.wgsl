@@ -204,7 +204,8 @@ fn cumulative(r: Ray, z: f32) -> vec3f {
 // sum_j C(z_j) (q_{j-1} - q_j) over one plane's grid ray at `base`, q_j = 1 where bin j is lit
 // (the caller weights the plane); bin j of the plane spans [z(j + offset), z(j + 1 + offset)]
 // around its sample (bin_offset), the first and the last extended to z(-1/4) and z(B + 1/4).
-fn lit_plane(r: Ray, base: u32, offset: f32, last: u32) -> vec3f {
+// `ends` holds C(z_end) and C(z(B + 1/4)), computed once per pixel by the caller.
+fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
     var sum = vec3f(0.0);
     // q before the first bin is 0 (the stretch below the bins is added apart), which the bits see
     // as a set bit before bin 0: carry starts at 1.
@@ -233,14 +234,20 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32) -> vec3f {
             if (z >= r.z_end) {
                 // Every later boundary sits at z_end: the rest telescopes to C(z_end) times q
                 // before this boundary (1 where it starts a shadow).
-                return sum + select(vec3f(0.0), cumulative(r, r.z_end), !lit_after);
+                return sum + select(vec3f(0.0), ends.z_end, !lit_after);
             }
             let c = cumulative(r, z);
             sum += select(c, -c, lit_after);
         }
     }
     // The boundary after the last bin (C clamps it to z_end when the ray ends first).
-    return sum + select(vec3f(0.0), cumulative(r, z_of_bin(f, f32(f.grid.z) + 0.25)), carry == 0u);
+    return sum + select(vec3f(0.0), ends.z_hi, carry == 0u);
+}
+
+// C at the end of the view ray and at the end of the bins' range.
+struct Ends {
+    z_end: vec3f,
+    z_hi: vec3f,
 }
 
 // The lit part of the view ray: the stretches before and after the bins' range (no caster reaches
@@ -255,15 +262,17 @@ fn lit(r: Ray, x: vec2u, bases: vec2u, weights: vec2f) -> vec3f {
     for (var w = first; w <= last; w++) {
         any |= grid[bases.x + w] | grid[bases.y + w];
     }
-    if (any == 0u) { return cumulative(r, r.z_end); }
+    let c_end = cumulative(r, r.z_end);
+    if (any == 0u) { return c_end; }
     var sum = vec3f(0.0);
     // Both planes' bins span [z(-1/4), z(B + 1/4)] (lit_plane).
     let z_lo = z_of_bin(f, -0.25);
     let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
+    let ends = Ends(c_end, cumulative(r, z_hi));
     if (r.z_start < z_lo) { sum += cumulative(r, z_lo); }
-    if (r.z_end > z_hi) { sum += cumulative(r, r.z_end) - cumulative(r, z_hi); }
-    if (weights.x > 0.0) { sum += weights.x * lit_plane(r, bases.x, bin_offset(x.x), last); }
-    if (weights.y > 0.0) { sum += weights.y * lit_plane(r, bases.y, bin_offset(x.y), last); }
+    if (r.z_end > z_hi) { sum += ends.z_end - ends.z_hi; }
+    if (weights.x > 0.0) { sum += weights.x * lit_plane(r, bases.x, bin_offset(x.x), last, ends); }
+    if (weights.y > 0.0) { sum += weights.y * lit_plane(r, bases.y, bin_offset(x.y), last, ends); }
     return sum;
 }
 

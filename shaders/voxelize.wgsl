@@ -75,9 +75,14 @@ fn vertex_less(a: vec3f, b: vec3f) -> bool {
 
 // Where edge (a, b) crosses the plane (signed distances da, db of opposite signs), computed from
 // the vertices in a canonical order: both triangles sharing the edge get the same bits.
+// (One division on the ordered pair rather than one per order.)
 fn edge_point(a: vec3f, da: f32, b: vec3f, db: f32) -> vec3f {
-    if (vertex_less(b, a)) { return b + (a - b) * (db / (db - da)); }
-    return a + (b - a) * (da / (da - db));
+    let swap = vertex_less(b, a);
+    let s = select(a, b, swap);
+    let t = select(b, a, swap);
+    let ds = select(da, db, swap);
+    let dt = select(db, da, swap);
+    return s + (t - s) * (ds / (ds - dt));
 }
 
 // A triangle's vertices, relative to the eye.
