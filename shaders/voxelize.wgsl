@@ -289,7 +289,9 @@ fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     // The end nearer the light along its light ray (smaller gamma): where a light ray runs along
     // the segment, that is where it meets the triangle first.
     var near_end = pa;
-    if (atan2(pb.y, pb.x) < atan2(pa.y, pa.x)) { near_end = pb; }
+    // pb has the smaller angle when it turns clockwise from pa (both lie in the half-plane v >= 0).
+    let turn = pb.x * pa.y - pb.y * pa.x;
+    if (turn > 0.0 || (turn == 0.0 && pb.x > pa.x)) { near_end = pb; }
     let s2 = InPlane(pa, pb - pa, vec2f(z0, z1), near_end, offset);
     // gamma is monotonic along the segment, so the cells of bins ks.x..ks.y are too: when the
     // first and the last bin meet the same cell, every bin between does, and the run is set a
