@@ -7,7 +7,7 @@
 // 32-bit words (the light rays of 128 bins); the grid is plane-major ((plane * rays + ray) * words
 // + word, common.wgsl), so a thread streams down its light rays `words` words at a time, and the
 // threads of one plane touch neighbouring words at every step. Read once, written once. Four words
-// per thread rather than one: on llvmpipe the loop's own work was a fifth of the pass.
+// per thread rather than one took a tenth off the pass on llvmpipe (docs/results.md, session 14).
 
 #import common
 

@@ -289,7 +289,8 @@ fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
     // The end nearer the light along its light ray (smaller gamma): where a light ray runs along
     // the segment, that is where it meets the triangle first.
     var near_end = pa;
-    // pb has the smaller angle when it turns clockwise from pa (both lie in the half-plane v >= 0).
+    // pb has the smaller angle when it turns clockwise from pa (both lie in the half-plane v >= 0);
+    // of two ends on one line through the eye, the one toward the light.
     let turn = pb.x * pa.y - pb.y * pa.x;
     if (turn > 0.0 || (turn == 0.0 && pb.x > pa.x)) { near_end = pb; }
     let s2 = InPlane(pa, pb - pa, vec2f(z0, z1), near_end, offset);
