@@ -296,6 +296,8 @@ pub struct Timing {
     /// Median per pass, in pass order (empty without GPU timestamps: then the totals are wall clock).
     pub passes: Vec<(Pass, f64)>,
     pub frames: usize,
+    /// Median of the per-frame totals of each round alone ([`BenchOptions::rounds`]), in order.
+    pub round_ms: Vec<f64>,
 }
 
 /// One point of the error sweep.
@@ -351,17 +353,31 @@ pub struct BenchResults {
 struct Frames {
     passes: Vec<Vec<(Pass, f64)>>,
     wall: Vec<f64>,
+    /// Frames per round, in order (they sum to `wall.len()`).
+    rounds: Vec<usize>,
 }
 
 impl Frames {
     /// Medians over the frames: GPU timestamps where the adapter has them, else wall clock.
     fn timing(&self, timestamps: bool) -> Timing {
         let frames = self.wall.len();
+        let totals: Vec<f64> = if timestamps {
+            self.passes.iter().map(|f| f.iter().map(|p| p.1).sum()).collect()
+        } else {
+            self.wall.clone()
+        };
+        let mut round_ms = Vec::with_capacity(self.rounds.len());
+        let mut start = 0;
+        for &n in &self.rounds {
+            let end = (start + n).min(totals.len());
+            round_ms.push(median(totals[start..end].to_vec()));
+            start = end;
+        }
         if !timestamps {
-            return Timing { total_ms: median(self.wall.clone()), volume_ms: f64::NAN, passes: Vec::new(), frames };
+            return Timing { total_ms: median(totals), volume_ms: f64::NAN, passes: Vec::new(), frames, round_ms };
         }
         let per_frame = &self.passes;
-        let total = median(per_frame.iter().map(|f| f.iter().map(|p| p.1).sum()).collect());
+        let total = median(totals);
         let volume = median(
             per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
         );
@@ -377,7 +393,7 @@ impl Frames {
                     .collect()
             })
             .unwrap_or_default();
-        Timing { total_ms: total, volume_ms: volume, passes, frames }
+        Timing { total_ms: total, volume_ms: volume, passes, frames, round_ms }
     }
 }
 
@@ -397,7 +413,8 @@ fn measure_frames(
         r.render(scene, width, height, point.method)?;
     }
     let frames = frames.max(1);
-    let mut timed = Frames { passes: Vec::with_capacity(frames), wall: Vec::with_capacity(frames) };
+    let mut timed =
+        Frames { passes: Vec::with_capacity(frames), wall: Vec::with_capacity(frames), rounds: vec![frames] };
     let mut last = None;
     for _ in 0..frames {
         let started = Instant::now();
@@ -473,21 +490,45 @@ pub struct BaselineRatio {
     /// When no raymarch point is as accurate: the sweep's most accurate one (setting, time in ms,
     /// relative RMSE) and its time over this point's, a lower bound of the speed-up.
     pub most_accurate: Option<(String, f64, f64, f64)>,
+    /// The ratio (or its lower bound) of each round's medians alone, when both points were timed
+    /// in the same rounds and there were at least two: how much a slow phase of the machine moved it.
+    pub by_round: Vec<f64>,
 }
 
 impl BaselineRatio {
     /// `12.3x (vs 256 steps, map 2048)`, or for a point more accurate than the whole sweep
-    /// `no raymarch point as accurate; the most accurate (..) takes 14.7x as long`.
+    /// `no raymarch point as accurate; the most accurate (..) takes 14.7x as long`; with
+    /// `, 11.9x to 12.8x by round` after several rounds.
     pub fn describe(&self) -> String {
-        match (&self.baseline, self.ratio, &self.most_accurate) {
+        let main = match (&self.baseline, self.ratio, &self.most_accurate) {
             (Some((setting, _)), Some(r), _) => format!("{r:.2}x (vs {setting})"),
             (_, _, Some((setting, _, err, r))) => format!(
                 "no raymarch point as accurate; the most accurate ({setting}, {:.3}%) takes {r:.2}x as long",
                 err * 100.0
             ),
-            _ => "no raymarch point as accurate".into(),
+            _ => return "no raymarch point as accurate".into(),
+        };
+        match self.round_range() {
+            Some((lo, hi)) => format!("{main}, {lo:.2}x to {hi:.2}x by round"),
+            None => main,
         }
     }
+
+    /// The smallest and the largest of [`BaselineRatio::by_round`], when there are any.
+    pub fn round_range(&self) -> Option<(f64, f64)> {
+        let lo = self.by_round.iter().copied().reduce(f64::min)?;
+        let hi = self.by_round.iter().copied().reduce(f64::max)?;
+        Some((lo, hi))
+    }
+}
+
+/// `baseline`'s time over `row`'s in each round alone (empty unless both have the same two or more).
+fn ratios_by_round(baseline: &Row, row: &Row) -> Vec<f64> {
+    let (b, r) = (&baseline.timing.round_ms, &row.timing.round_ms);
+    if b.len() < 2 || b.len() != r.len() {
+        return Vec::new();
+    }
+    b.iter().zip(r).map(|(b, r)| b / r).collect()
 }
 
 /// [`BaselineRatio`] of `row` against the raymarch rows of `rows` (every point of the baseline's
@@ -504,6 +545,7 @@ pub fn baseline_ratio(rows: &[Row], row: &Row) -> BaselineRatio {
             baseline: Some((b.point.setting(), b.timing.total_ms)),
             ratio: Some(b.timing.total_ms / row.timing.total_ms),
             most_accurate: None,
+            by_round: ratios_by_round(b, row),
         },
         None => {
             let best = rows
@@ -522,6 +564,7 @@ pub fn baseline_ratio(rows: &[Row], row: &Row) -> BaselineRatio {
                 most_accurate: best.map(|b| {
                     (b.point.setting(), b.timing.total_ms, b.scatter.rel_rmse, b.timing.total_ms / row.timing.total_ms)
                 }),
+                by_round: best.map(|b| ratios_by_round(b, row)).unwrap_or_default(),
             }
         }
     }
@@ -641,6 +684,7 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
             bar.set_message(format!("round {round} of {}: {name} {setting}", opts.rounds));
             match measure_frames(renderer, &mut work, w, h, &row.point, opts.warmup, frames) {
                 Ok((more, _)) => {
+                    pooled.rounds.push(more.wall.len());
                     pooled.passes.extend(more.passes);
                     pooled.wall.extend(more.wall);
                     row.timing = pooled.timing(timestamps);
@@ -800,7 +844,7 @@ mod tests {
             ErrorStats { rel_rmse: err, rmse: err, max_abs: err, psnr: 0.0, mean_ref: 1.0, non_finite: 0, pixels: 1 };
         Row {
             point,
-            timing: Timing { total_ms: ms, volume_ms: ms, passes: Vec::new(), frames: 1 },
+            timing: Timing { total_ms: ms, volume_ms: ms, passes: Vec::new(), frames: 1, round_ms: vec![ms] },
             scatter: stats,
             hdr: stats,
         }
@@ -823,6 +867,37 @@ mod tests {
         assert_eq!((&better.baseline, better.ratio), (&None, None));
         assert_eq!(better.most_accurate, Some(("256 steps, map 4096".to_string(), 100.0, 0.03, 4.0)));
         assert!(better.describe().contains("no raymarch point as accurate; the most accurate"));
+    }
+
+    #[test]
+    fn each_round_has_its_own_median_and_ratio() {
+        // Two rounds of three frames; the second round is slower (a slow phase of the machine).
+        let frames = Frames { passes: Vec::new(), wall: vec![10.0, 11.0, 30.0, 20.0, 21.0, 22.0], rounds: vec![3, 3] };
+        let t = frames.timing(false);
+        assert_eq!(t.round_ms, vec![11.0, 21.0]);
+        assert_eq!(t.total_ms, 20.5);
+        // With timestamps the rounds split the per-frame sums of the passes.
+        let passes = Frames {
+            passes: vec![
+                vec![(Pass::Scan, 1.0), (Pass::Integrate, 2.0)],
+                vec![(Pass::Scan, 3.0), (Pass::Integrate, 4.0)],
+            ],
+            wall: vec![100.0, 100.0],
+            rounds: vec![1, 1],
+        };
+        assert_eq!(passes.timing(true).round_ms, vec![3.0, 7.0]);
+
+        let mut vsv = row(Point::grid(Method::Vsv, 2048, 512, 768, 2048), 100.0, 0.01);
+        vsv.timing.round_ms = vec![100.0, 125.0];
+        let mut march = row(Point::march(1024, 8192, false), 400.0, 0.009);
+        march.timing.round_ms = vec![420.0, 375.0];
+        let r = baseline_ratio(&[vsv.clone(), march.clone()], &vsv);
+        assert_eq!(r.by_round, vec![4.2, 3.0]);
+        assert_eq!(r.round_range(), Some((3.0, 4.2)));
+        assert_eq!(r.describe(), "4.00x (vs 1024 steps, map 8192), 3.00x to 4.20x by round");
+        // Points timed in different numbers of rounds are not compared round by round.
+        march.timing.round_ms = vec![400.0];
+        assert!(baseline_ratio(&[vsv.clone(), march], &vsv).by_round.is_empty());
     }
 
     #[test]

@@ -384,10 +384,14 @@ pub fn markdown(r: &BenchResults) -> String {
              the sweep whose scattered light is at least as accurate, and its frame time over the grid point's (the \
              speed-up at equal or better error). \"none\": no raymarch point of the sweep is that accurate; the \
              ratio is then the sweep's most accurate raymarch point's time over the grid point's (≥: a lower bound, \
-             the baseline would need more than its whole sweep).\n"
+             the baseline would need more than its whole sweep). \"By round\": the smallest and the largest ratio of \
+             each round's medians alone, with several rounds: how far a slow phase of the machine moved it.\n"
         );
-        let _ = writeln!(s, "| method | setting | rel RMSE | ms | cheapest as-accurate raymarch | its ms | ratio |");
-        let _ = writeln!(s, "|---|---|---:|---:|---|---:|---:|");
+        let _ = writeln!(
+            s,
+            "| method | setting | rel RMSE | ms | cheapest as-accurate raymarch | its ms | ratio | by round |"
+        );
+        let _ = writeln!(s, "|---|---|---:|---:|---|---:|---:|---:|");
         for row in r.rows.iter().filter(|x| x.point.method_name() != "raymarch") {
             let b = super::baseline_ratio(&r.rows, row);
             let (setting, t, ratio) = match (&b.baseline, b.ratio, &b.most_accurate) {
@@ -397,9 +401,13 @@ pub fn markdown(r: &BenchResults) -> String {
                 }
                 _ => ("none".into(), "—".into(), "—".into()),
             };
+            let by_round = match b.round_range() {
+                Some((lo, hi)) => format!("{lo:.2}x – {hi:.2}x"),
+                None => "—".into(),
+            };
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {setting} | {t} | {ratio} |",
+                "| {} | {} | {} | {} | {setting} | {t} | {ratio} | {by_round} |",
                 row.point.method_name(),
                 row.point.setting(),
                 pct(row.scatter.rel_rmse),
