@@ -60,7 +60,8 @@ struct Frame {
     // The box the medium fills for a directional light.
     medium_min: vec4f,
     medium_max: vec4f,
-    // planes, rays, bins, words per ray.
+    // planes, rays, bins, 32-bit words per ray in the grid buffer (the bins' words rounded up to
+    // four: every ray starts on 16 bytes, so Scan and Integrate read it as vec4u).
     grid: vec4u,
     // image width, height, unused (the phase function is the PHASE override), flags.
     image: vec4u,
@@ -179,8 +180,8 @@ fn z_along(f: Frame, gamma: f32, t: f32) -> f32 {
 // ---- the grid's (plane, ray) axes, epipolar or Cartesian -----------------------------------
 
 // The first word of grid ray (plane x, ray y). The grid is plane-major: a plane's rays follow one
-// another, each `words` words long (Grid::ray_offset in Rust). A light ray (fixed x and bin)
-// therefore steps `words` words from one ray cell to the next: the scan streams down it, and a
+// another, each f.grid.w words long (Grid::ray_offset and Grid::stride in Rust). A light ray (fixed
+// x and bin) therefore steps f.grid.w words from one ray cell to the next: the scan streams down it, and a
 // Voxelize item's ORs into consecutive cells fall in neighbouring cache lines.
 fn ray_offset(f: Frame, x: u32, y: u32) -> u32 {
     return (x * f.grid.y + y) * f.grid.w;

@@ -4,51 +4,33 @@
 //
 // Along a light ray (fixed plane x and bin k) gamma grows with y, so after the scan a set bit means
 // "some caster lies between this voxel and the light". One thread per plane and group of four
-// 32-bit words (the light rays of 128 bins); the grid is plane-major ((plane * rays + ray) * words
-// + word, common.wgsl), so a thread streams down its light rays `words` words at a time, and the
-// threads of one plane touch neighbouring words at every step. Read once, written once. Four words
-// per thread rather than one took a tenth off the pass on llvmpipe (docs/results.md, session 14).
+// 32-bit words (the light rays of 128 bins); the grid is plane-major ((plane * rays + ray) * stride
+// + word, common.wgsl), so a thread streams down its light rays four words at a time, and the
+// threads of one plane touch neighbouring words at every step. Read once, written once. The words
+// are read and written as one vec4u: every ray starts on 16 bytes (Grid::stride), and on llvmpipe a
+// load costs one instruction per lane whatever its width, so the vector took the pass from ~63 to
+// ~35 ms on the classroom (docs/results.md, session 15).
 
 #import common
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
-@group(0) @binding(1) var<storage, read_write> grid: array<u32>;
+@group(0) @binding(1) var<storage, read_write> grid: array<vec4u>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
-// Words per thread (cull.wgsl sizes the dispatch by it).
-const GROUP: u32 = 4u;
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     f = frame_in;
-    let rays = f.grid.y;
-    let words = f.grid.w;
-    let groups = (words + GROUP - 1u) / GROUP;
-    let column = id.x; // plane * groups + group
-    if (column >= f.grid.x * groups) { return; }
-    let w0 = (column % groups) * GROUP;
-    let base = ray_offset(f, column / groups, 0u) + w0;
-    if (w0 + GROUP <= words) {
-        var acc = vec4u(0u);
-        for (var y = 0u; y < rays; y++) {
-            let i = base + y * words;
-            acc |= vec4u(grid[i], grid[i + 1u], grid[i + 2u], grid[i + 3u]);
-            grid[i] = acc.x;
-            grid[i + 1u] = acc.y;
-            grid[i + 2u] = acc.z;
-            grid[i + 3u] = acc.w;
-        }
-        return;
-    }
-    // The last group of a ray whose words are not a multiple of four.
-    for (var w = 0u; w0 + w < words; w++) {
-        var acc = 0u;
-        for (var y = 0u; y < rays; y++) {
-            let i = base + w + y * words;
-            acc |= grid[i];
-            grid[i] = acc;
-        }
+    // Vectors per ray (f.grid.w, the stride in words, is a multiple of four).
+    let quads = f.grid.w / 4u;
+    let column = id.x; // plane * quads + quad
+    if (column >= f.grid.x * quads) { return; }
+    let start = ray_offset(f, column / quads, 0u) / 4u + column % quads;
+    var acc = vec4u(0u);
+    for (var y = 0u; y < f.grid.y; y++) {
+        let i = start + y * quads;
+        acc |= grid[i];
+        grid[i] = acc;
     }
 }

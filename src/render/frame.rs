@@ -41,7 +41,7 @@ pub struct FrameUniforms {
     /// The box the medium fills for a directional light (`w` unused).
     pub medium_min: Vec4,
     pub medium_max: Vec4,
-    /// planes, rays, bins, 32-bit words per ray.
+    /// planes, rays, bins, 32-bit words per ray in the grid buffer ([`crate::params::Grid::stride`]).
     pub grid: UVec4,
     /// Image width and height, unused, flags (`FLAG_*`).
     pub image: UVec4,
@@ -208,7 +208,7 @@ impl FrameSetup {
             ),
             medium_min: mb.min.extend(0.0),
             medium_max: mb.max.extend(0.0),
-            grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
+            grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.stride()),
             image: UVec4::new(width, height, 0, flags),
             table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
             work: UVec4::new(1, 1, 0, 0),

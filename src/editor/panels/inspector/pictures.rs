@@ -47,7 +47,7 @@ pub struct GridSnapshot {
     pub setup: FrameSetup,
     /// The frame's camera (hover linking maps through it).
     pub camera: Camera,
-    /// After the scan: `(ray * planes + plane) * words + word`.
+    /// After the scan, laid out as [`Grid::ray_offset`] says.
     pub shadow: Vec<u32>,
     /// Before the scan, same layout (absent when it could not be kept).
     pub geometry: Option<Vec<u32>>,
