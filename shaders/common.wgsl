@@ -79,10 +79,11 @@ fn words_per_item(f: Frame) -> u32 {
     return max(f.work.y, 1u);
 }
 
-// Voxelize's work items for a triangle's `words` words of bins in one plane.
+// Voxelize's work items for a triangle's `words` words of bins in one plane. In f32: llvmpipe
+// divides integers one lane at a time; both operands are at most 64 (Grid::BINS.max / 32), where
+// the float quotient's ceiling is exact.
 fn word_groups(f: Frame, words: u32) -> u32 {
-    let per = words_per_item(f);
-    return (words + per - 1u) / per;
+    return u32(ceil(f32(words) / f32(words_per_item(f))));
 }
 
 // ---- pixels --------------------------------------------------------------------------------

@@ -191,19 +191,30 @@ fn main(
     if (first >= total) { return; }
     let found = find_item(first);
     var slot = found.x;
-    var within = found.y;
     var rec = records[slot];
     var p = triangle(rec.x);
+    var per_plane = word_groups(f, rec.w >> 16u);
+    // The item's plane (counted from the triangle's first) and group of words, followed along the
+    // run: one integer division per run (llvmpipe divides one lane at a time; three per item cost
+    // the classroom ~4%, session 15).
+    var plane = found.y / per_plane;
+    var group = found.y - plane * per_plane;
     let last = first + min(run, total - first);
     for (var item = first; item < last; item++) {
-        if (within == rec.z * word_groups(f, rec.w >> 16u)) {
+        if (plane == rec.z) {
             slot++;
-            within = 0u;
             rec = records[slot];
             p = triangle(rec.x);
+            per_plane = word_groups(f, rec.w >> 16u);
+            plane = 0u;
+            group = 0u;
         }
-        voxelize_item(rec, within, p);
-        within++;
+        voxelize_item(rec, plane, group, p);
+        group++;
+        if (group == per_plane) {
+            group = 0u;
+            plane++;
+        }
     }
 }
 
@@ -213,15 +224,14 @@ fn triangle(tri: u32) -> Tri {
     return Tri(tris[3u * tri].xyz - e, tris[3u * tri + 1u].xyz - e, tris[3u * tri + 2u].xyz - e);
 }
 
-// Item `within` of the triangle with record `rec` (vertices p): one plane, a group of words of
-// bins (first and last, w).
-fn voxelize_item(rec: vec4u, within: u32, p: Tri) {
+// The item of the triangle with record `rec` (vertices p) in its `plane`-th plane and `group`-th
+// group of words of bins (first and last, w).
+fn voxelize_item(rec: vec4u, plane: u32, group: u32, p: Tri) {
     let words = rec.w >> 16u;
-    let groups = word_groups(f, words);
     let per = words_per_item(f);
-    let first = (rec.w & 0xffffu) + (within % groups) * per;
+    let first = (rec.w & 0xffffu) + group * per;
     let w = vec2u(first, min(first + per, (rec.w & 0xffffu) + words) - 1u);
-    var x = rec.y + within / groups;
+    var x = rec.y + plane;
     if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
     run_cell = -1;
     run_word = 0xffffffffu;
