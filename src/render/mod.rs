@@ -794,6 +794,27 @@ mod layout_tests {
         );
     }
 
+    /// The value of `const name: u32` in `file`.
+    fn wgsl_u32(file: &str, name: &str) -> u32 {
+        let (module, _) = ShaderLibrary::embedded().validate(file).unwrap_or_else(|e| panic!("{e}"));
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("const {name} not found in {file}"));
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => panic!("const {name} in {file} is not a u32 literal: {e:?}"),
+        }
+    }
+
+    /// Constants the Rust side sizes dispatches and buffers by.
+    #[test]
+    fn dispatch_constants_match_wgsl() {
+        assert_eq!(wgsl_u32("ranges.wgsl", "ROWS"), Ranges::ROWS);
+        assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
+    }
+
     #[test]
     fn shadow_uniforms_match_wgsl() {
         check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());

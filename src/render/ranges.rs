@@ -20,6 +20,9 @@ pub struct Ranges {
 }
 
 impl Ranges {
+    /// Pixels per thread of `reduce`, a column (ranges.wgsl's `ROWS`, checked by a test).
+    pub const ROWS: u32 = 16;
+
     /// Byte offset of `ranges.z` in [`super::FrameUniforms`]; `z_lo, z_hi` are copied there.
     pub const UNIFORM_OFFSET: u64 = std::mem::offset_of!(super::FrameUniforms, ranges) as u64 + 8;
 
@@ -83,7 +86,8 @@ impl Ranges {
             });
             pass.set_bind_group(0, bind_group, &[]);
             pass.set_pipeline(reduce);
-            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            // A thread per column of `ROWS` pixels (ranges.wgsl), 64 columns per workgroup.
+            pass.dispatch_workgroups(width.div_ceil(64), height.div_ceil(Self::ROWS), 1);
             pass.set_pipeline(finish);
             pass.dispatch_workgroups(1, 1, 1);
         }
