@@ -77,9 +77,12 @@ struct Kept {
 fn cull_one(tri: u32) -> Kept {
     // A triangle of zero area hides no light ray: no work for it (loaders drop them too).
     var k = Kept(2u, vec4u(0u), 0u);
+    // The vertices are read once and handed on to the bounds.
     let v0 = tris[3u * tri];
     let p0 = v0.xyz;
-    let n = cross(tris[3u * tri + 1u].xyz - p0, tris[3u * tri + 2u].xyz - p0);
+    let p1 = tris[3u * tri + 1u].xyz;
+    let p2 = tris[3u * tri + 2u].xyz;
+    let n = cross(p1 - p0, p2 - p0);
     if (all(n == vec3f(0.0))) { return k; }
     // A closed mesh's face turned away from a light outside it: the light's rays enter the solid
     // through a face toward the light first, and the scan shadows everything behind that hit
@@ -88,9 +91,9 @@ fn cull_one(tri: u32) -> Kept {
     let to_light = select(f.light.xyz, f.light.xyz - p0, is_point_light());
     if (sides[u32(v0.w)] * dot(n, to_light) < 0.0) { return k; }
     k.why = 2u;
-    let rects = triangle_rects(tri);
+    let rects = triangle_rects(p0, p1, p2);
     if (rects.a.x >= rects.a.z) { return k; }
-    let z = triangle_z_range(tri);
+    let z = triangle_z_range(p0, p1, p2);
     let words = word_range(z);
     k.why = 1u;
     if (words.y == 0u) { return k; }

@@ -128,11 +128,8 @@ struct Rects {
     b: vec4f,
 }
 
-fn triangle_rects(tri: u32) -> Rects {
+fn triangle_rects(p0: vec3f, p1: vec3f, p2: vec3f) -> Rects {
     var o = Rects(vec4f(0.0), vec4f(0.0));
-    let p0 = tris[3u * tri].xyz;
-    let p1 = tris[3u * tri + 1u].xyz;
-    let p2 = tris[3u * tri + 2u].xyz;
     let e = f.eye.xyz;
     let a = f.axis.xyz;
     if (is_cartesian()) {
@@ -220,10 +217,7 @@ fn triangle_rects(tri: u32) -> Rects {
 
 // z range (psi, r or view depth) a triangle occupies: its edges' extremes, plus 0 (or pi) where
 // the light's axis pierces it.
-fn triangle_z_range(tri: u32) -> vec2f {
-    let p0 = tris[3u * tri].xyz;
-    let p1 = tris[3u * tri + 1u].xyz;
-    let p2 = tris[3u * tri + 2u].xyz;
+fn triangle_z_range(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
     let e = f.eye.xyz;
     if (is_cartesian()) {
         let fw = f.cam_fwd.xyz;
