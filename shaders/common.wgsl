@@ -29,6 +29,7 @@ override PHASE: u32 = 0u;          // Phase::id(): 0 isotropic, 1 HG, 2 Schlick,
 override GREY_MEDIUM: bool = false; // sigma_t equal in R, G and B: one channel's exponentials
 override CARTESIAN: bool = false;   // the screen-space Cartesian grid (the paper's section 2), else epipolar
 override COSINE_BINS: bool = false; // bins uniform in cos(psi) (point lights only), else uniform in psi / r
+override QUAD_RAYS: bool = true;    // every grid ray starts on four words (bins a multiple of 128): Integrate reads them as vec4u
 
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
@@ -60,8 +61,7 @@ struct Frame {
     // The box the medium fills for a directional light.
     medium_min: vec4f,
     medium_max: vec4f,
-    // planes, rays, bins, 32-bit words per ray in the grid buffer (the bins' words rounded up to
-    // four: every ray starts on 16 bytes, so Scan and Integrate read it as vec4u).
+    // planes, rays, bins, 32-bit words per ray.
     grid: vec4u,
     // image width, height, unused (the phase function is the PHASE override), flags.
     image: vec4u,
@@ -181,8 +181,8 @@ fn z_along(f: Frame, gamma: f32, t: f32) -> f32 {
 // ---- the grid's (plane, ray) axes, epipolar or Cartesian -----------------------------------
 
 // The first word of grid ray (plane x, ray y). The grid is plane-major: a plane's rays follow one
-// another, each f.grid.w words long (Grid::ray_offset and Grid::stride in Rust). A light ray (fixed
-// x and bin) therefore steps f.grid.w words from one ray cell to the next: the scan streams down it, and a
+// another, each `words` words long (Grid::ray_offset in Rust). A light ray (fixed x and bin)
+// therefore steps `words` words from one ray cell to the next: the scan streams down it, and a
 // Voxelize item's ORs into consecutive cells fall in neighbouring cache lines.
 fn ray_offset(f: Frame, x: u32, y: u32) -> u32 {
     return (x * f.grid.y + y) * f.grid.w;

@@ -225,8 +225,8 @@ fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
         dispatch[4] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
         dispatch[5] = 1u;
         // Scan: nothing to carry when no triangle was kept anywhere.
-        // One thread per plane and vector of four words (scan.wgsl).
-        let columns = f.grid.x * (f.grid.w / 4u);
+        // One thread per plane and group of four words (scan.wgsl's vectors, scan_words.wgsl's GROUP).
+        let columns = f.grid.x * ((f.grid.w + 3u) / 4u);
         dispatch[6] = select(0u, (columns + 63u) / 64u, atomicLoad(&counters[4]) > 0u);
         dispatch[7] = 1u;
         dispatch[8] = 1u;

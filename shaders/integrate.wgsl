@@ -16,7 +16,8 @@
 // lit fraction, blended linearly between the two planes around the pixel's angle (hiding the
 // planes) on the pixel's own ray cell, and q_{-1} = q_B = 0. The sum runs only over the bins where
 // q changes: the two rays' shadow boundaries, found with bit operations on four 32-bit words at a
-// time (one vec4u load: Grid::stride), so empty and fully shadowed words cost a share of one test
+// time (one vec4u load where the rays start on four words, QUAD_RAYS), so empty and fully shadowed
+// words cost a share of one test
 // and the cost grows with the number of shadow boundaries, not with the bins. (Walking the words
 // one by one, the loop itself was half of the pass on llvmpipe: 80 -> 66 ms on the classroom,
 // docs/results.md, session 15.) It sums lit light directly (never "total minus shadowed"), so a fully
@@ -31,7 +32,7 @@
 #import common
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
-// Four words of bins per element; every ray starts on an element (f.grid.w is a multiple of four).
+// Four words of bins per element (with QUAD_RAYS every ray starts on an element).
 @group(0) @binding(1) var<storage, read> grid: array<vec4u>;
 @group(0) @binding(2) var<storage, read> table: array<vec4f>;
 @group(0) @binding(3) var distance: texture_2d<f32>;
@@ -216,12 +217,12 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
     let first = u32(clamp(floor(bin_coord(f, r.z_start) - offset), 0.0, f32(f.grid.z - 1u))) / 32u;
     if (first > 0u) {
         // Every boundary before z_start has C = U(z_start) = 0: start from the previous word's last bit.
-        carry = pick(grid[(base + first - 1u) / 4u], (first - 1u) % 4u) >> 31u;
+        carry = word(base + first - 1u) >> 31u;
     }
     // Words past `last` hold bins beyond z_end only: the end term below covers them.
     let lanes = vec4u(0u, 1u, 2u, 3u);
     for (var g = first / 4u; g <= last / 4u; g++) {
-        let q = grid[base / 4u + g];
+        let q = quad(base, g);
         let w = vec4u(g * 4u) + lanes;
         // Where the bit differs from the one before it (bit 0 against the previous word's last),
         // in the words first..last only.
@@ -262,6 +263,19 @@ fn pick(q: vec4u, c: u32) -> u32 {
     return select(select(q.x, q.y, c == 1u), select(q.z, q.w, c == 3u), c >= 2u);
 }
 
+// Word i of the grid.
+fn word(i: u32) -> u32 {
+    return pick(grid[i / 4u], i % 4u);
+}
+
+// Words 4g to 4g + 3 of the grid ray that starts at word `base` (past its end: the next ray's,
+// which the callers mask).
+fn quad(base: u32, g: u32) -> vec4u {
+    if (QUAD_RAYS) { return grid[base / 4u + g]; }
+    let i = base + 4u * g;
+    return vec4u(word(i), word(i + 1u), word(i + 2u), word(i + 3u));
+}
+
 // C at the end of the view ray and at the end of the bins' range.
 struct Ends {
     z_end: vec3f,
@@ -280,7 +294,7 @@ fn lit(r: Ray, x: vec2u, bases: vec2u, weights: vec2f) -> vec3f {
     for (var g = first / 4u; g <= last / 4u; g++) {
         let w = vec4u(g * 4u) + vec4u(0u, 1u, 2u, 3u);
         let inside = w >= vec4u(first) & w <= vec4u(last);
-        let q = (grid[bases.x / 4u + g] | grid[bases.y / 4u + g]) & select(vec4u(0u), vec4u(~0u), inside);
+        let q = (quad(bases.x, g) | quad(bases.y, g)) & select(vec4u(0u), vec4u(~0u), inside);
         any |= q.x | q.y | q.z | q.w;
     }
     let c_end = cumulative(r, r.z_end);

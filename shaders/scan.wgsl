@@ -3,13 +3,13 @@
 //   shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]
 //
 // Along a light ray (fixed plane x and bin k) gamma grows with y, so after the scan a set bit means
-// "some caster lies between this voxel and the light". One thread per plane and group of four
-// 32-bit words (the light rays of 128 bins); the grid is plane-major ((plane * rays + ray) * stride
-// + word, common.wgsl), so a thread streams down its light rays four words at a time, and the
-// threads of one plane touch neighbouring words at every step. Read once, written once. The words
-// are read and written as one vec4u: every ray starts on 16 bytes (Grid::stride), and on llvmpipe a
-// load costs one instruction per lane whatever its width, so the vector took the pass from ~63 to
-// ~35 ms on the classroom (docs/results.md, session 15).
+// "some caster lies between this voxel and the light". The grid is plane-major ((plane * rays +
+// ray) * words + word, common.wgsl), so a thread streams down its light rays one ray's stride at a
+// time, and the threads of one plane touch neighbouring words at every step. Read once, written
+// once. For grids whose rays start on four words (bins a multiple of 128, Grid::quad_rays; the
+// others take scan_words.wgsl): a thread takes four words as one vec4u, and on llvmpipe a load
+// costs one instruction per lane whatever its width: the vector took the pass from ~60 to ~35 ms on
+// the classroom (docs/results.md, session 15).
 
 #import common
 
@@ -19,12 +19,13 @@
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
+// (cull.wgsl sizes the dispatch: a thread per plane and vector of four words.)
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     f = frame_in;
-    // Vectors per ray (f.grid.w, the stride in words, is a multiple of four).
-    let quads = f.grid.w / 4u;
-    let column = id.x; // plane * quads + quad
+    let words = f.grid.w;
+    let column = id.x;
+    let quads = words / 4u;
     if (column >= f.grid.x * quads) { return; }
     let start = ray_offset(f, column / quads, 0u) / 4u + column % quads;
     var acc = vec4u(0u);

@@ -414,24 +414,24 @@ impl Grid {
         self.bins / 32
     }
 
-    /// 32-bit words each ray takes in the grid buffer: [`Grid::words`] rounded up to four, so that
-    /// every ray starts on 16 bytes and Scan and Integrate read four words at a time (on llvmpipe
-    /// each load is one instruction per lane whatever its width: Scan took 45% less time reading
-    /// vectors, docs/results.md, session 15). The padding words stay 0.
-    pub fn stride(&self) -> u32 {
-        self.words().div_ceil(4) * 4
+    /// Whether every ray starts on four words (bins a multiple of 128): Scan and Integrate then
+    /// read the grid four words at a time (`QUAD_RAYS` in common.wgsl). On llvmpipe a load is one
+    /// instruction per lane whatever its width: Scan took 45% less time reading vectors, Integrate
+    /// 20% (docs/results.md, session 15).
+    pub fn quad_rays(&self) -> bool {
+        self.words().is_multiple_of(4)
     }
 
     /// The index of the first word of grid ray (`plane`, `ray`) in the grid buffer
-    /// ([`crate::render::Renderer::read_grid`]): plane-major, each ray [`Grid::stride`] words
-    /// apart, its bins in the first [`Grid::words`] (`ray_offset` in common.wgsl).
+    /// ([`crate::render::Renderer::read_grid`]): plane-major, each ray [`Grid::words`] long
+    /// (`ray_offset` in common.wgsl).
     pub fn ray_offset(&self, plane: u32, ray: u32) -> usize {
-        (plane as usize * self.rays as usize + ray as usize) * self.stride() as usize
+        (plane as usize * self.rays as usize + ray as usize) * self.words() as usize
     }
 
     /// Bytes of one grid buffer.
     pub fn bytes(&self) -> u64 {
-        self.planes as u64 * self.rays as u64 * self.stride() as u64 * 4
+        self.planes as u64 * self.rays as u64 * self.words() as u64 * 4
     }
 
     pub fn validate(&self) -> Result<(), ParamError> {

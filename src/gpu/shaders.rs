@@ -15,6 +15,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("shadow_cull.wgsl", include_str!("../../shaders/shadow_cull.wgsl")),
     ("voxelize.wgsl", include_str!("../../shaders/voxelize.wgsl")),
     ("scan.wgsl", include_str!("../../shaders/scan.wgsl")),
+    ("scan_words.wgsl", include_str!("../../shaders/scan_words.wgsl")),
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),
     ("integrate.wgsl", include_str!("../../shaders/integrate.wgsl")),
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),

@@ -41,7 +41,7 @@ pub struct FrameUniforms {
     /// The box the medium fills for a directional light (`w` unused).
     pub medium_min: Vec4,
     pub medium_max: Vec4,
-    /// planes, rays, bins, 32-bit words per ray in the grid buffer ([`crate::params::Grid::stride`]).
+    /// planes, rays, bins, 32-bit words per ray.
     pub grid: UVec4,
     /// Image width and height, unused, flags (`FLAG_*`).
     pub image: UVec4,
@@ -108,6 +108,7 @@ impl FrameSetup {
             self.mapping.spacing == BinSpacing::UniformCosine && !matches!(self.method, Method::Raymarch { .. });
         super::Variant::new(self.frame.is_point(), phase, self.uniforms.sigma_t.truncate().to_array())
             .with_grid(self.method == Method::Cartesian, cosine)
+            .with_quad_rays(self.uniforms.grid.w.is_multiple_of(4))
     }
 
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {
@@ -208,7 +209,7 @@ impl FrameSetup {
             ),
             medium_min: mb.min.extend(0.0),
             medium_max: mb.max.extend(0.0),
-            grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.stride()),
+            grid: UVec4::new(scene.grid.planes, scene.grid.rays, scene.grid.bins, scene.grid.words()),
             image: UVec4::new(width, height, 0, flags),
             table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
             work: UVec4::new(1, 1, 0, 0),

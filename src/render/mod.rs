@@ -633,7 +633,7 @@ impl Renderer {
                 if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                     f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
                 }
-                p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS);
+                p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays);
                 f.mark(Pass::Scan);
                 if setup.frame.is_point() && method == Method::Vsv {
                     p.scatter_table.record(&mut f.enc, v);
@@ -884,6 +884,7 @@ mod binding_tests {
         check("cull.wgsl", CullBindings::SLOTS);
         check("voxelize.wgsl", VoxelizeBindings::SLOTS);
         check("scan.wgsl", ScanBindings::SLOTS);
+        check("scan_words.wgsl", ScanBindings::SLOTS);
         check("scatter_table.wgsl", ScatterTableBindings::SLOTS);
         check("integrate.wgsl", IntegrateBindings::SLOTS);
         check("raymarch.wgsl", RaymarchBindings::SLOTS);
@@ -896,7 +897,7 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 11] = [
+        let passes: [(&str, &[(&str, Kind)]); 12] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
@@ -904,6 +905,7 @@ mod binding_tests {
             ("cull.wgsl", CullBindings::SLOTS),
             ("voxelize.wgsl", VoxelizeBindings::SLOTS),
             ("scan.wgsl", ScanBindings::SLOTS),
+            ("scan_words.wgsl", ScanBindings::SLOTS),
             ("scatter_table.wgsl", ScatterTableBindings::SLOTS),
             ("integrate.wgsl", IntegrateBindings::SLOTS),
             ("raymarch.wgsl", RaymarchBindings::SLOTS),
@@ -961,7 +963,7 @@ mod private_array_tests {
 
     #[test]
     fn the_hot_shaders_hold_no_private_array() {
-        for file in ["cull.wgsl", "voxelize.wgsl", "scan.wgsl", "integrate.wgsl"] {
+        for file in ["cull.wgsl", "voxelize.wgsl", "scan.wgsl", "scan_words.wgsl", "integrate.wgsl"] {
             let found = private_arrays(file);
             assert!(found.is_empty(), "{file} holds arrays in private or function memory: {found:?}");
         }

@@ -12,17 +12,20 @@ bindings! {
 }
 
 pub struct Scan {
-    pipeline: wgpu::ComputePipeline,
+    /// For grids whose rays start on four words (`scan.wgsl`, four words as one vector).
+    quads: wgpu::ComputePipeline,
+    /// For the others (`scan_words.wgsl`, a word at a time).
+    words: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
 }
 
 impl Scan {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Scan, GpuError> {
-        let module = lib.module(device, "scan.wgsl")?;
         let layout = ScanBindings::layout(device, "Scan::layout", wgpu::ShaderStages::COMPUTE);
-        let pipeline = compute_pipeline(device, "Scan::pipeline", &module, &layout);
-        Ok(Scan { pipeline, layout, bind_group: None })
+        let quads = compute_pipeline(device, "Scan::pipeline", &lib.module(device, "scan.wgsl")?, &layout);
+        let words = compute_pipeline(device, "Scan::pipeline_words", &lib.module(device, "scan_words.wgsl")?, &layout);
+        Ok(Scan { quads, words, layout, bind_group: None })
     }
 
     /// (Re)binds the inputs; called when the grid changes.
@@ -30,12 +33,13 @@ impl Scan {
         self.bind_group = Some(b.bind(device, "Scan::bind_group", &self.layout));
     }
 
-    /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept).
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, args: &wgpu::Buffer, offset: u64) {
+    /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept);
+    /// `quad_rays`: [`crate::params::Grid::quad_rays`].
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, args: &wgpu::Buffer, offset: u64, quad_rays: bool) {
         let Some(bind_group) = &self.bind_group else { return };
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(if quad_rays { &self.quads } else { &self.words });
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups_indirect(args, offset);
     }

@@ -1,7 +1,8 @@
 //! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type, the
-//! phase function, whether the medium is grey or the grid's axes builds one pipeline per
-//! combination a frame actually uses, with the WGSL pipeline-overridable constants `POINT_LIGHT`,
-//! `PHASE`, `GREY_MEDIUM`, `CARTESIAN` and `COSINE_BINS` (`shaders/common.wgsl`) set. The shader
+//! phase function, whether the medium is grey, the grid's axes or (Integrate) whether its rays start
+//! on four words builds one pipeline per combination a frame actually uses, with the WGSL
+//! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`
+//! and `QUAD_RAYS` (`shaders/common.wgsl`) set. The shader
 //! compiler then folds the branches on them away when it builds the pipeline, instead of every
 //! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
 //! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
@@ -31,6 +32,9 @@ pub struct Variant {
     /// The bins are uniform in `cos psi` ([`crate::params::BinSpacing::UniformCosine`], point
     /// lights only), else uniform in `psi` or distance.
     pub cosine_bins: bool,
+    /// Every grid ray starts on four 32-bit words ([`crate::params::Grid::quad_rays`]): Integrate
+    /// reads the grid as `vec4<u32>`. Only Integrate's pipelines depend on it.
+    pub quad_rays: bool,
 }
 
 impl Variant {
@@ -38,7 +42,7 @@ impl Variant {
     /// bins uniform in angle or distance; see [`Variant::with_grid`].
     pub fn new(point_light: bool, phase: &Phase, sigma_t: [f32; 3]) -> Variant {
         let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
-        Variant { point_light, phase: phase.id(), grey, cartesian: false, cosine_bins: false }
+        Variant { point_light, phase: phase.id(), grey, cartesian: false, cosine_bins: false, quad_rays: true }
     }
 
     /// The same variant for a grid of the given axes.
@@ -46,9 +50,14 @@ impl Variant {
         Variant { cartesian, cosine_bins, ..self }
     }
 
+    /// The same variant for a grid whose rays do (or do not) start on four words.
+    pub fn with_quad_rays(self, quad_rays: bool) -> Variant {
+        Variant { quad_rays, ..self }
+    }
+
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 5] {
+    pub fn constants(&self) -> [(&'static str, f64); 6] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("POINT_LIGHT", b(self.point_light)),
@@ -56,6 +65,7 @@ impl Variant {
             ("GREY_MEDIUM", b(self.grey)),
             ("CARTESIAN", b(self.cartesian)),
             ("COSINE_BINS", b(self.cosine_bins)),
+            ("QUAD_RAYS", b(self.quad_rays)),
         ]
     }
 
@@ -113,12 +123,14 @@ impl<P> VariantPipelines<P> {
 
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
-        let epipolar = Variant { cartesian: false, cosine_bins: false, ..v };
+        // Only Integrate (`All`) reads QUAD_RAYS: the others share one pipeline across grids.
+        let v_any_rays = Variant { quad_rays: true, ..v };
+        let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
             Specialised::Light => Variant { phase: 0, grey: false, ..epipolar },
             Specialised::LightAndPhase => Variant { grey: false, ..epipolar },
             Specialised::LightPhaseAndMedium => epipolar,
-            Specialised::LightAndGrid => Variant { phase: 0, grey: false, ..v },
+            Specialised::LightAndGrid => Variant { phase: 0, grey: false, ..v_any_rays },
             Specialised::All => v,
         }
     }
@@ -132,8 +144,11 @@ impl<P> VariantPipelines<P> {
             let label = match self.reads {
                 Specialised::Light => format!("[{light}]"),
                 Specialised::LightAndGrid => format!("[{light}{}]", key.grid_name()),
-                Specialised::LightAndPhase | Specialised::LightPhaseAndMedium | Specialised::All => {
-                    format!("[{key}]")
+                Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
+                // Only Integrate tells the grid's ray alignment apart (an implementation detail,
+                // so not in the variant's name).
+                Specialised::All => {
+                    format!("[{key}{}]", if key.quad_rays { "" } else { ", rays off four words" })
                 }
             };
             let p = build(&key.constants(), &label);
@@ -239,17 +254,21 @@ mod tests {
                 for (phase, (cartesian, cosine_bins)) in
                     phases.iter().flat_map(|p| [(false, false), (false, true), (true, false)].map(|g| (p, g)))
                 {
-                    let v = Variant::new(point_light, phase, sigma_t).with_grid(cartesian, cosine_bins);
-                    let constants: naga::back::PipelineConstants =
-                        v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
-                    for ep in &module.entry_points {
-                        naga::back::pipeline_constants::process_overrides(
-                            &module,
-                            &info,
-                            Some((ep.stage, ep.name.as_str())),
-                            &constants,
-                        )
-                        .unwrap_or_else(|e| panic!("{file}:{} specialised to {v}: {e}", ep.name));
+                    for quad_rays in [true, false] {
+                        let v = Variant::new(point_light, phase, sigma_t)
+                            .with_grid(cartesian, cosine_bins)
+                            .with_quad_rays(quad_rays);
+                        let constants: naga::back::PipelineConstants =
+                            v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
+                        for ep in &module.entry_points {
+                            naga::back::pipeline_constants::process_overrides(
+                                &module,
+                                &info,
+                                Some((ep.stage, ep.name.as_str())),
+                                &constants,
+                            )
+                            .unwrap_or_else(|e| panic!("{file}:{} specialised to {v}: {e}", ep.name));
+                        }
                     }
                 }
             }
@@ -276,6 +295,7 @@ mod tests {
         assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
         assert!(common.contains("override GREY_MEDIUM"));
         assert!(common.contains("override CARTESIAN") && common.contains("override COSINE_BINS"));
+        assert!(common.contains("override QUAD_RAYS"));
     }
 
     #[test]
@@ -320,7 +340,9 @@ mod tests {
         let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
         let mut integrate = VariantPipelines::new(Specialised::All);
         for v in grids {
-            shared.prepare(v, |c, _| assert_eq!(&c[3..], &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0)]));
+            shared.prepare(v, |c, _| {
+                assert_eq!(&c[3..], &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0), ("QUAD_RAYS", 1.0)])
+            });
             voxels.prepare(v, |c, _| {
                 assert_eq!(c[3], ("CARTESIAN", if v.cartesian { 1.0 } else { 0.0 }));
                 assert_eq!(c[4], ("COSINE_BINS", if v.cosine_bins { 1.0 } else { 0.0 }));
@@ -336,6 +358,32 @@ mod tests {
         });
         assert_eq!(labels, ["[point light, cosine bins]"]);
         assert_eq!(sun.with_grid(true, false).to_string(), "directional light, isotropic, grey medium, cartesian grid");
+    }
+
+    /// Whether the grid's rays start on four words changes Integrate's pipeline only.
+    #[test]
+    fn only_integrate_specialises_to_the_rays_alignment() {
+        let sun = Variant::new(false, &Phase::Isotropic, GREY);
+        let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
+        let mut integrate = VariantPipelines::new(Specialised::All);
+        let mut labels = Vec::new();
+        for v in [sun, sun.with_quad_rays(false)] {
+            voxels.prepare(v, |c, _| assert_eq!(c[5], ("QUAD_RAYS", 1.0)));
+            integrate.prepare(v, |c, label| {
+                assert_eq!(c[5], ("QUAD_RAYS", if v.quad_rays { 1.0 } else { 0.0 }));
+                labels.push(label.to_string());
+            });
+        }
+        assert_eq!(voxels.variants().count(), 1);
+        assert_eq!(integrate.variants().count(), 2);
+        assert_eq!(
+            labels,
+            [
+                "[directional light, isotropic, grey medium]",
+                "[directional light, isotropic, grey medium, rays off four words]"
+            ]
+        );
+        assert_eq!(sun.with_quad_rays(false).to_string(), sun.to_string(), "not in the name users see");
     }
 
     const GREY: [f32; 3] = [0.09, 0.09, 0.09];
