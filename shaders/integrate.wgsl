@@ -17,11 +17,10 @@
 // planes) on the pixel's own ray cell, and q_{-1} = q_B = 0. The sum runs only over the bins where
 // q changes: the two rays' shadow boundaries, found with bit operations on four 32-bit words at a
 // time (one vec4u load where the rays start on four words, QUAD_RAYS), so empty and fully shadowed
-// words cost a share of one test
-// and the cost grows with the number of shadow boundaries, not with the bins. (Walking the words
-// one by one, the loop itself was half of the pass on llvmpipe: 80 -> 66 ms on the classroom,
-// docs/results.md, session 15.) It sums lit light directly (never "total minus shadowed"), so a fully
-// shadowed ray is exactly 0.
+// words cost a share of one test and the cost grows with the number of shadow boundaries, not with
+// the bins. (Walking the words one by one, the loop itself was half of the pass on llvmpipe; four
+// at a time took it from ~80 to ~63 ms on the classroom, docs/results.md, session 15.) It sums lit
+// light directly (never "total minus shadowed"), so a fully shadowed ray is exactly 0.
 //
 // Own shadow: where the light is behind the surface at the end of the ray, the thin layer of
 // medium in front of it is in that surface's shadow, but the grid's neighbouring samples (up to a

@@ -4,7 +4,7 @@
 //
 // Along a light ray (fixed plane x and bin k) gamma grows with y, so after the scan a set bit means
 // "some caster lies between this voxel and the light". The grid is plane-major ((plane * rays +
-// ray) * words + word, common.wgsl), so a thread streams down its light rays one ray's stride at a
+// ray) * words + word, common.wgsl), so a thread streams down its light rays one ray's words at a
 // time, and the threads of one plane touch neighbouring words at every step. Read once, written
 // once. For grids whose rays start on four words (bins a multiple of 128, Grid::quad_rays; the
 // others take scan_words.wgsl): a thread takes four words as one vec4u, and on llvmpipe a load
