@@ -108,7 +108,7 @@ impl FrameSetup {
             self.mapping.spacing == BinSpacing::UniformCosine && !matches!(self.method, Method::Raymarch { .. });
         super::Variant::new(self.frame.is_point(), phase, self.uniforms.sigma_t.truncate().to_array())
             .with_grid(self.method == Method::Cartesian, cosine)
-            .with_quad_rays(self.uniforms.grid.w.is_multiple_of(4))
+            .with_quad_rays(self.mapping.grid.quad_rays())
     }
 
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {
