@@ -15,7 +15,8 @@
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and group of f.work.y 32-bit
 // words of bins (one word on a GPU, all of them on a CPU, where a plane's set-up costs more than
-// its bins); a thread takes a run of consecutive items (one on a GPU, 16 on a CPU). In the plane,
+// its bins); a thread takes a run of items (one on a GPU, 16 on a CPU, every LANES-th of a stretch
+// shared with its SIMD group: main, below). In the plane,
 // the triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are
 // both monotonic, so the bins whose centre z lies in the segment's z range are exactly the light
 // rays that hit it, and the hit of each follows in closed form; where the first and the last hit
@@ -183,40 +184,48 @@ fn main(
 ) {
     f = frame_in;
     let total = counters[3];
-    // A run of `run` consecutive items (the renderer's choice per adapter, cull.wgsl sizes the
-    // dispatch by it): one search for the first, then the list is walked. A triangle's items are
-    // consecutive, so its record and vertices are read once per run.
+    // A run of `run` items (the renderer's choice per adapter, cull.wgsl sizes the dispatch by
+    // it): one search for the first, then the list is walked.
     let run = max(f.work.x, 1u);
-    let first = ((wg.y * groups.x + wg.x) * 64u + lid) * run;
+    // The workgroup takes 64 x run consecutive items, each group of LANES threads (a SIMD group
+    // on a CPU adapter) LANES x run of them, interleaved: at every step of the run its lanes hold
+    // LANES consecutive items, mostly neighbouring planes of one triangle, whose segments are
+    // alike; with a run of consecutive items each, the lanes held unrelated items and every step
+    // waited for its longest walk over bins (the classroom's Voxelize took 8% longer, session 16).
+    let lane = lid % LANES;
+    let base = (wg.y * groups.x + wg.x) * 64u * run + (lid - lane) * run;
+    let first = base + lane;
     if (first >= total) { return; }
     let found = find_item(first);
     var slot = found.x;
     var rec = records[slot];
-    var p = triangle(rec.x);
     var per_plane = word_groups(f, rec.w >> 16u);
-    // The item's plane (counted from the triangle's first) and group of words, followed along the
-    // run: one integer division per run (llvmpipe divides one lane at a time; three per item cost
-    // the classroom ~4%, session 15).
-    var plane = found.y / per_plane;
-    var group = found.y - plane * per_plane;
-    let last = first + min(run, total - first);
-    for (var item = first; item < last; item++) {
-        if (plane == rec.z) {
-            slot++;
-            rec = records[slot];
-            p = triangle(rec.x);
-            per_plane = word_groups(f, rec.w >> 16u);
-            plane = 0u;
-            group = 0u;
+    // The item's index within its triangle's items, followed along the run.
+    var within = found.y;
+    let last = min(base + LANES * run, total);
+    for (var item = first; item < last; item += LANES) {
+        if (item != first) {
+            within += LANES;
+            // Past the triangle's items: on to the triangle that holds this one (a real loop,
+            // so that lanes still inside their triangle skip it).
+            loop {
+                let n = rec.z * per_plane;
+                if (within < n) { break; }
+                within -= n;
+                slot++;
+                rec = records[slot];
+                per_plane = word_groups(f, rec.w >> 16u);
+            }
         }
-        voxelize_item(rec, plane, group, p);
-        group++;
-        if (group == per_plane) {
-            group = 0u;
-            plane++;
-        }
+        // within / per_plane in f32 (exact below 2^24): llvmpipe divides integers one lane at a time.
+        let plane = u32(floor((f32(within) + 0.5) / f32(per_plane)));
+        voxelize_item(rec, plane, within - plane * per_plane, triangle(rec.x));
     }
 }
+
+// Threads per SIMD group on llvmpipe (8 lanes of 32 bits); a GPU runs one item per thread, where
+// the interleaving changes nothing.
+const LANES: u32 = 8u;
 
 // Triangle `tri`'s vertices relative to the eye.
 fn triangle(tri: u32) -> Tri {

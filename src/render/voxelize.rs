@@ -10,9 +10,11 @@
 //! Crossings of shared edges are computed in a canonical vertex order, which makes the sampling
 //! watertight: no light ray slips between two triangles that share an edge or a vertex.
 //!
-//! A thread takes a run of consecutive items ([`Voxelize::items_per_thread`], in the frame
-//! uniforms' `work.x`, which Cull also reads to size the dispatch): it searches the list for the
-//! first only and reads each triangle's record and vertices once per run.
+//! A thread takes a run of items ([`Voxelize::items_per_thread`], in the frame uniforms' `work.x`,
+//! which Cull also reads to size the dispatch): it searches the list for the first only. The
+//! threads of a SIMD group (8 on llvmpipe) share a stretch of the list and take every 8th item of
+//! it, so that at each step their lanes hold neighbouring items (mostly neighbouring planes of one
+//! triangle) and finish their walks over bins together.
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -32,9 +34,10 @@ bindings! {
 }
 
 pub struct Voxelize {
-    /// Consecutive work items per thread. On a CPU adapter (llvmpipe, which runs 8 lanes per core)
-    /// the search for an item's triangle and the triangle's reads were a quarter of the pass: runs
-    /// of 16 took the classroom's Voxelize from ~190 to ~150 ms (8 to 64 measured alike). A GPU
+    /// Work items per thread (interleaved with its SIMD group's, voxelize.wgsl `main`). On a CPU
+    /// adapter (llvmpipe, which runs 8 lanes per core) the search for an item's triangle and the
+    /// triangle's reads were a quarter of the pass: runs of 16 took the classroom's Voxelize from
+    /// ~190 to ~150 ms (8 to 64 measured alike). A GPU
     /// keeps one item per thread, the balanced list this pass was designed around: a run of 16
     /// would leave most of a large GPU idle on the classroom's 1.3 M items (not measured there).
     pub items_per_thread: u32,
