@@ -191,7 +191,7 @@ fn main(
     // on a CPU adapter) LANES x run of them, interleaved: at every step of the run its lanes hold
     // LANES consecutive items, mostly neighbouring planes of one triangle, whose segments are
     // alike; with a run of consecutive items each, the lanes held unrelated items and every step
-    // waited for its longest walk over bins (the classroom's Voxelize took 8% longer, session 16).
+    // waited for its longest walk over bins (the classroom's Voxelize took 1-8% longer, session 16).
     let lane = lid % LANES;
     let base = (wg.y * groups.x + wg.x) * 64u * run + (lid - lane) * run;
     let first = base + lane;
