@@ -217,7 +217,9 @@ fn main(
                 per_plane = word_groups(f, rec.w >> 16u);
             }
         }
-        // within / per_plane in f32 (exact below 2^24): llvmpipe divides integers one lane at a time.
+        // within / per_plane in f32 (llvmpipe divides integers one lane at a time). Exact: within
+        // < 2^19 and per_plane <= 64 (Grid limits), so (within + 1/2) / per_plane lies at least
+        // 1/(2 per_plane) from an integer, more than its rounding error.
         let plane = u32(floor((f32(within) + 0.5) / f32(per_plane)));
         voxelize_item(rec, plane, within - plane * per_plane, triangle(rec.x));
     }

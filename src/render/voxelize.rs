@@ -37,9 +37,9 @@ pub struct Voxelize {
     /// Work items per thread (interleaved with its SIMD group's, voxelize.wgsl `main`). On a CPU
     /// adapter (llvmpipe, which runs 8 lanes per core) the search for an item's triangle and the
     /// triangle's reads were a quarter of the pass: runs of 16 took the classroom's Voxelize from
-    /// ~190 to ~150 ms (8 to 64 measured alike). A GPU
-    /// keeps one item per thread, the balanced list this pass was designed around: a run of 16
-    /// would leave most of a large GPU idle on the classroom's 1.3 M items (not measured there).
+    /// ~190 to ~150 ms (8 to 64 measured alike; 8 and 32 slower again in session 16). A GPU keeps
+    /// one item per thread, the balanced list this pass was designed around: a run of 16 would
+    /// leave most of a large GPU idle on the classroom's 1.3 M items (not measured there).
     pub items_per_thread: u32,
     /// 32-bit words of bins per work item: the words of one plane's segment that one item walks.
     /// A GPU takes one (a wall's segment spread over many threads). On a CPU adapter an item's
