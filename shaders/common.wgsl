@@ -68,8 +68,21 @@ struct Frame {
     // scatter table rows, columns; Cartesian light axis (0 +right, 1 -right, 2 +up, 3 -up); unused.
     table: vec4u,
     // Voxelize's work list (cull.wgsl, voxelize.wgsl): work items per thread, 32-bit words of bins
-    // per item; zw unused.
+    // per item, the coarsest shadow-pyramid level Cull may read (0: no test of hidden triangles,
+    // shadow_pyramid.wgsl); w unused.
     work: vec4u,
+}
+
+// The shadow map's matrices and parameters (ShadowUniforms in shadow_map.rs; a layout test checks
+// it): read by shadow_lookup.wgsl's importers and by Cull's test of hidden triangles.
+struct ShadowFaces {
+    view_proj: array<mat4x4f, 6>,
+    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
+    // z: informational (the light type is the POINT_LIGHT override), w: the cube's near distance
+    // (point) or the orthographic depth range (directional).
+    params: vec4f,
+    // Directional: the reference point far on the light's side.
+    origin: vec4f,
 }
 
 fn is_point_light() -> bool { return POINT_LIGHT; }

@@ -7,8 +7,9 @@
 // it) times the 32-bit words of bins whose centre z its z range holds. A triangle is dropped when
 // that footprint is empty: outside the visible wedge, past the last visible ray, or outside the
 // bins' z range (beyond the farthest visible depth that the Ranges pass found); so is a closed
-// mesh's face turned away from a light outside it (src/scene/solid.rs). Kept triangles get a
-// record and a work count
+// mesh's face turned away from a light outside it (src/scene/solid.rs), and, for a directional
+// light, a triangle the shadow map shows behind nearer surfaces all around it (`hidden_from_light`,
+// below). Kept triangles get a record and a work count
 //
 //   items(t) = planes(t) * ceil(words(t) / f.work.y)
 //
@@ -35,14 +36,20 @@
 @group(0) @binding(4) var<storage, read_write> blocks: array<u32>;
 // [0] kept (this chunk), [1] culled by z, [2] culled by rays or planes, [3] items (this chunk),
 // [4] kept (all chunks), [5] items (all chunks), [6] items dropped because the list overflowed,
-// [7] culled as a closed mesh's face turned away from the light.
-@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 8>;
+// [7] culled as a closed mesh's face turned away from the light, [8] culled as hidden from the
+// light, [9..12] unused.
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 12>;
 // DispatchIndirect arguments: [3..6] Voxelize, [6..9] Scan ([0..3] unused).
 @group(0) @binding(6) var<storage, read_write> dispatch: array<u32, 12>;
 // Per mesh (the first vertex's w holds a triangle's mesh, as a float): +1 keep only the faces
 // whose winding normal (b - a) x (c - a) faces the light, -1 only those facing away, 0 all
 // (SceneGpu::light_sides).
 @group(0) @binding(7) var<storage, read> sides: array<f32>;
+// The shadow map's matrices (its first layer is the directional light's orthographic view) and
+// its pyramid of block maxima (shadow_pyramid.wgsl), levels PYRAMID_FIRST_LEVEL to f.work.z one
+// after the other.
+@group(0) @binding(8) var<storage, read> shadow: ShadowFaces;
+@group(0) @binding(9) var<storage, read> pyramid: array<f32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -50,6 +57,8 @@ var<private> f: Frame;
 const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (64 threads x 16)
 const VOXEL_GROUP: u32 = 64u; // Voxelize's workgroup size
 const MAX_GROUPS: u32 = 65535u;
+// The shadow pyramid's finest level (ShadowPyramid::FIRST_LEVEL): blocks of 4x4 texels.
+const PYRAMID_FIRST_LEVEL: u32 = 2u;
 
 // Bins whose sample lies in [z.x, z.y], as a word range (first, count); count 0 when none.
 // Samples sit a quarter bin either side of the centres (bin_offset), and a quarter bin of margin
@@ -66,9 +75,64 @@ fn word_range(z: vec2f) -> vec2u {
     return vec2u(w0, w1 - w0 + 1u);
 }
 
+// Whether the directional shadow map shows the triangle behind nearer surfaces all around it:
+// its nearest depth (an orthographic depth is linear, so a vertex's) lies beyond the farthest
+// depth over the map's texels within one texel of its footprint, read as at most 3x3 texels of the
+// first pyramid level whose blocks are that coarse. Every light ray through the triangle then
+// meets a nearer surface first, at a smaller gamma, and after the scan the triangle's bits would
+// change nothing (up to an occluder's gap narrower than a texel between texel centres, which the
+// map cannot see: docs/pruning.md). Triangles reaching past the map's edge, or wider than the
+// coarsest level's blocks, are kept.
+fn hidden_from_light(p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
+    let coarsest = f.work.z;
+    if (POINT_LIGHT || coarsest == 0u) { return false; }
+    let m = shadow.view_proj[0];
+    let c0 = (m * vec4f(p0, 1.0)).xyz;
+    let c1 = (m * vec4f(p1, 1.0)).xyz;
+    let c2 = (m * vec4f(p2, 1.0)).xyz;
+    let n = shadow.params.x;
+    // Texel coordinates, as shadow_lookup.wgsl's: texel i spans [i, i + 1).
+    let t0 = vec2f(c0.x * 0.5 + 0.5, 0.5 - c0.y * 0.5) * n;
+    let t1 = vec2f(c1.x * 0.5 + 0.5, 0.5 - c1.y * 0.5) * n;
+    let t2 = vec2f(c2.x * 0.5 + 0.5, 0.5 - c2.y * 0.5) * n;
+    // The texels the footprint touches and a ring of one around them.
+    let lo = floor(min(t0, min(t1, t2))) - 1.0;
+    let hi = floor(max(t0, max(t1, t2))) + 1.0;
+    if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
+    let a = vec2u(lo);
+    let b = vec2u(hi);
+    // The first level whose blocks hold the range in three per side, and where it starts.
+    var level = PYRAMID_FIRST_LEVEL;
+    var offset = 0u;
+    let size = u32(n);
+    loop {
+        if (all((b >> vec2u(level)) - (a >> vec2u(level)) <= vec2u(2u))) { break; }
+        if (level >= coarsest) { return false; }
+        let side = (size + (1u << level) - 1u) >> level;
+        offset += side * side;
+        level++;
+    }
+    let side = (size + (1u << level) - 1u) >> level;
+    let i = a >> vec2u(level);
+    let j = b >> vec2u(level);
+    let mid = min(i + 1u, j);
+    // Rows i, mid and j (the same row twice where the range holds fewer).
+    let r0 = offset + i.y * side;
+    let r1 = offset + mid.y * side;
+    let r2 = offset + j.y * side;
+    let far = max(
+        max(max(pyramid[r0 + i.x], pyramid[r0 + mid.x]), max(pyramid[r0 + j.x], pyramid[r1 + i.x])),
+        max(max(pyramid[r1 + mid.x], pyramid[r1 + j.x]), max(max(pyramid[r2 + i.x], pyramid[r2 + mid.x]), pyramid[r2 + j.x])),
+    );
+    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
+    // texel centre may round below its vertices' minimum.
+    return far < min(c0.z, min(c1.z, c2.z)) - 4e-6;
+}
+
 // Why a triangle is dropped, or its record and items.
 struct Kept {
-    // 0: kept, 1: culled by z, 2: culled by rays or planes, 3: a solid's face away from the light.
+    // 0: kept, 1: culled by z, 2: culled by rays or planes, 3: a solid's face away from the light,
+    // 4: hidden from the light.
     why: u32,
     record: vec4u,
     items: u32,
@@ -102,6 +166,8 @@ fn cull_one(tri: u32) -> Kept {
     var nx = u32(rects.a.z) - x0;
     if (rects.b.x < rects.b.z) { nx += u32(rects.b.z) - u32(rects.b.x); }
     nx = min(nx, f.grid.x);
+    k.why = 4u;
+    if (hidden_from_light(p0, p1, p2)) { return k; }
     k.why = 0u;
     k.record = vec4u(tri, x0, nx, words.x | (words.y << 16u));
     k.items = nx * word_groups(f, words.y);
@@ -120,7 +186,8 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     let run = max(f.work.x, 1u);
     let first = (id.x + id.y * groups.x * 64u) * run;
     let last = min(first + run, count);
-    var culled = vec3u(0u);
+    // Culled counts by reason 1 to 4, in a vector's lanes (no private array, architecture.md).
+    var culled = vec4u(0u);
     for (var tri = first; tri < last; tri++) {
         let k = cull_one(tri);
         if (k.why == 0u) {
@@ -128,12 +195,13 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
             records[slot] = k.record;
             offsets[slot] = k.items;
         } else {
-            culled[k.why - 1u] += 1u;
+            culled += vec4u(vec4u(k.why) == vec4u(1u, 2u, 3u, 4u));
         }
     }
     if (culled.x > 0u) { atomicAdd(&counters[1], culled.x); }
     if (culled.y > 0u) { atomicAdd(&counters[2], culled.y); }
     if (culled.z > 0u) { atomicAdd(&counters[7], culled.z); }
+    if (culled.w > 0u) { atomicAdd(&counters[8], culled.w); }
 }
 
 @compute @workgroup_size(1)

@@ -13,16 +13,7 @@
 //   light's side):  stored = depth * far
 // An empty texel (depth 0 for the cube, 1 for the orthographic layer) stores "nothing": 3e38.
 
-// ShadowUniforms in shadow_map.rs (a layout test checks it).
-struct ShadowFaces {
-    view_proj: array<mat4x4f, 6>,
-    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
-    // z: informational (the light type is the POINT_LIGHT override), w: the cube's near distance
-    // (point) or the orthographic depth range (directional).
-    params: vec4f,
-    // Directional: the reference point far on the light's side.
-    origin: vec4f,
-}
+// ShadowFaces (common.wgsl) holds the matrices and the map's parameters.
 
 // Cube face of a direction, in the order +x -x +y -y +z -z (as shadow_map.rs renders them).
 fn cube_face(d: vec3f) -> u32 {

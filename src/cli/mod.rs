@@ -528,7 +528,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
             if let Some(p) = &pruned_z {
                 println!(
                     "work kept{}: planes over {:.1} of 360 deg, rays gamma {:.1}..{:.1} deg, bins z {:.4}..{:.4} (casters {:.4}..{:.4}), \
-                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth, {} solids' faces away from the light), passes: {}, \
+                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth, {} solids' faces away from the light, \
+                     {} hidden from the light), passes: {}, \
                      shaders specialised to a {}",
                     if p.enabled { "" } else { " (--no-prune)" },
                     p.planes_span_deg,
@@ -544,6 +545,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
                     p.triangles.culled_view,
                     p.triangles.culled_depth,
                     p.triangles.culled_back,
+                    p.triangles.culled_hidden,
                     p.passes.iter().map(|p| p.label()).collect::<Vec<_>>().join(" > "),
                     p.variant
                 );

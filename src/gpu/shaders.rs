@@ -13,6 +13,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
     ("shadow_map.wgsl", include_str!("../../shaders/shadow_map.wgsl")),
     ("shadow_cull.wgsl", include_str!("../../shaders/shadow_cull.wgsl")),
+    ("shadow_pyramid.wgsl", include_str!("../../shaders/shadow_pyramid.wgsl")),
     ("voxelize.wgsl", include_str!("../../shaders/voxelize.wgsl")),
     ("scan.wgsl", include_str!("../../shaders/scan.wgsl")),
     ("scan_words.wgsl", include_str!("../../shaders/scan_words.wgsl")),

@@ -4,7 +4,8 @@
 //! A triangle outside the visible wedge of planes, past the last visible ray, or outside the bins'
 //! z range is dropped, and so is a closed mesh's face turned away from a light outside it (its
 //! light rays enter the solid through a face toward the light first, and the scan shadows all
-//! behind that). A kept one gets a record and `items = planes x ceil(words / words per item)`,
+//! behind that), and, for a directional light, one the shadow map shows behind nearer surfaces at
+//! every texel around it ([`super::ShadowPyramid`]). A kept one gets a record and `items = planes x ceil(words / words per item)`,
 //! the light-space samples it may cover in units of one plane x a group of 32-bit words of bins
 //! ([`super::Voxelize::words_per_item`]: one on a GPU, all on a CPU); an exclusive prefix sum
 //! over the items (1024 per workgroup, then the blocks) lets Voxelize give every item its own
@@ -26,6 +27,8 @@ bindings! {
         counters: Kind::StorageRw,
         dispatch: Kind::StorageRw,
         sides: Kind::Storage,
+        shadow: Kind::Storage,
+        pyramid: Kind::Storage,
     }
 }
 
@@ -41,6 +44,9 @@ pub struct CullCounts {
     /// Dropped: a face of a closed mesh turned away from the light, which lies outside it
     /// (`crate::scene::solid`); the light meets that solid through its faces toward it first.
     pub culled_back: u32,
+    /// Dropped: behind nearer surfaces at every shadow-map texel around it (directional lights;
+    /// [`super::ShadowPyramid`]); its bits would change nothing after the scan.
+    pub culled_hidden: u32,
     /// Voxelize's work items (one triangle x one plane x a group of 32-bit words of bins).
     pub items: u64,
 }
@@ -83,7 +89,7 @@ pub struct Cull {
     /// One per chunk of triangles, with the chunk's triangle count.
     bind_groups: Vec<(wgpu::BindGroup, u32)>,
     /// `[kept (chunk), culled by depth, culled by view, items (chunk), kept (all), items (all),
-    /// overflowed lists, culled as back faces]`.
+    /// overflowed lists, culled as back faces, culled as hidden from the light, 3 unused]`.
     pub counters: wgpu::Buffer,
     /// DispatchIndirect arguments: Voxelize at 12, Scan at 24.
     pub dispatch: wgpu::Buffer,
@@ -121,7 +127,7 @@ impl Cull {
             ),
             layout,
             bind_groups: Vec::new(),
-            counters: buffer("Cull::counters", 32, wgpu::BufferUsages::empty()),
+            counters: buffer("Cull::counters", 48, wgpu::BufferUsages::empty()),
             dispatch: buffer("Cull::dispatch", 48, wgpu::BufferUsages::INDIRECT),
         })
     }
@@ -131,8 +137,16 @@ impl Cull {
         self.pipelines.prepare(device, variant);
     }
 
-    /// (Re)binds the scene's chunks of triangles and lists; called when the scene changes.
-    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &super::SceneGpu) {
+    /// (Re)binds the scene's chunks of triangles and lists, the shadow map's uniforms and its
+    /// pyramid; called when any of them changes.
+    pub fn bind(
+        &mut self,
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        geometry: &super::SceneGpu,
+        shadow: &wgpu::Buffer,
+        pyramid: &wgpu::Buffer,
+    ) {
         let l = &geometry.lists;
         self.bind_groups = geometry
             .nonempty_chunks()
@@ -146,6 +160,8 @@ impl Cull {
                     counters: self.counters.as_entire_binding(),
                     dispatch: self.dispatch.as_entire_binding(),
                     sides: geometry.light_sides.as_entire_binding(),
+                    shadow: shadow.as_entire_binding(),
+                    pyramid: pyramid.as_entire_binding(),
                 };
                 (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), n)
             })

@@ -49,7 +49,8 @@ pub struct FrameUniforms {
     /// 3 -up); `w` unused.
     pub table: UVec4,
     /// Voxelize's work list: items per thread and 32-bit words of bins per item (the renderer sets
-    /// them per adapter: [`super::Voxelize`]); `zw` unused.
+    /// them per adapter: [`super::Voxelize`]), and the coarsest shadow-pyramid level Cull reads to
+    /// drop triangles hidden from the light (0: no such test; [`super::ShadowPyramid`]); `w` unused.
     pub work: UVec4,
 }
 

@@ -22,6 +22,7 @@ mod scan;
 mod scatter_table;
 mod scene_gpu;
 mod shadow_map;
+mod shadow_pyramid;
 mod surface;
 pub(crate) mod util;
 mod variant;
@@ -40,6 +41,7 @@ pub use scene_gpu::SceneGpu;
 pub use shadow_map::{
     FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowCulling, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
+pub use shadow_pyramid::{ShadowPyramid, ShadowPyramidBindings};
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
@@ -148,6 +150,7 @@ struct Passes {
     shadow_map: ShadowMap,
     surface: Surface,
     ranges: Ranges,
+    shadow_pyramid: ShadowPyramid,
     cull: Cull,
     voxelize: Voxelize,
     scan: Scan,
@@ -165,6 +168,7 @@ impl Passes {
                 shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 surface: Surface::new(d, lib)?,
                 ranges: Ranges::new(d, lib)?,
+                shadow_pyramid: ShadowPyramid::new(d, lib)?,
                 cull: Cull::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib, ctx.info.device_type)?,
                 scan: Scan::new(d, lib)?,
@@ -231,6 +235,10 @@ pub struct Renderer {
     /// their faces toward the eye or the light (on by default; off only to compare,
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
+    /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
+    /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and on
+    /// its own only to compare, `tests/occlusion.rs`).
+    pub occlusion_culling: bool,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -276,6 +284,7 @@ impl Renderer {
             prune: true,
             shadow_face_culling: true,
             back_face_culling: true,
+            occlusion_culling: true,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -379,7 +388,14 @@ impl Renderer {
     pub fn cull_counts(&self) -> Result<CullCounts, GpuError> {
         let bytes = self.ctx.read_buffer(&self.passes.cull.counters)?;
         let v: &[u32] = bytemuck::cast_slice(&bytes);
-        Ok(CullCounts { kept: v[4], culled_depth: v[1], culled_view: v[2], culled_back: v[7], items: v[5] as u64 })
+        Ok(CullCounts {
+            kept: v[4],
+            culled_depth: v[1],
+            culled_view: v[2],
+            culled_back: v[7],
+            culled_hidden: v[8],
+            items: v[5] as u64,
+        })
     }
 
     /// The final linear image of the last frame (RGBA32Float), e.g. for an editor to display.
@@ -490,7 +506,10 @@ impl Renderer {
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
         p.surface.bind(d, SurfaceBindings { frame_in: frame() });
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
-        p.cull.bind(d, &self.frame_buffer, &geometry.gpu);
+        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, p.shadow_map.size);
+        if let Some(pyramid) = &p.shadow_pyramid.pyramid {
+            p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
+        }
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
         p.scan.bind(d, ScanBindings { frame_in: frame(), grid: bits.as_entire_binding() });
         p.scatter_table.bind(d, &self.frame_buffer);
@@ -547,8 +566,6 @@ impl Renderer {
             }));
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
-        let v = &self.passes.voxelize;
-        setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, 0, 0);
         let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
@@ -560,6 +577,12 @@ impl Renderer {
             let ctx = self.ctx.clone();
             ctx.scoped("binding the passes", || self.rebind())?;
         }
+        let v = &self.passes.voxelize;
+        // The test of hidden triangles: a directional light's map, pruning on (the pyramid is bound
+        // with the map, above).
+        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
+        let levels = if occlusion { self.passes.shadow_pyramid.bound_coarsest() } else { 0 };
+        setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
@@ -620,6 +643,10 @@ impl Renderer {
                 if self.prune {
                     p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
                     f.mark(Pass::Ranges);
+                }
+                if u.work.z > 0 {
+                    p.shadow_pyramid.record(&mut f.enc);
+                    f.mark(Pass::ShadowPyramid);
                 }
                 f.enc.clear_buffer(bits, 0, None);
                 p.cull.begin_frame(&mut f.enc);
@@ -813,11 +840,18 @@ mod layout_tests {
     fn dispatch_constants_match_wgsl() {
         assert_eq!(wgsl_u32("ranges.wgsl", "ROWS"), Ranges::ROWS);
         assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
+        assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);
     }
 
     #[test]
     fn shadow_uniforms_match_wgsl() {
         check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());
+        check(
+            "shadow_pyramid.wgsl",
+            "Level",
+            fields!(shadow_pyramid::Level: src_size, dst_size, src_offset, dst_offset),
+            size_of::<shadow_pyramid::Level>(),
+        );
         check(
             "shadow_cull.wgsl",
             "ShadowCull",
@@ -881,6 +915,7 @@ mod binding_tests {
         check("shadow_cull.wgsl", ShadowCullBindings::SLOTS);
         check("surface.wgsl", SurfaceBindings::SLOTS);
         check("ranges.wgsl", RangesBindings::SLOTS);
+        check("shadow_pyramid.wgsl", ShadowPyramidBindings::SLOTS);
         check("cull.wgsl", CullBindings::SLOTS);
         check("voxelize.wgsl", VoxelizeBindings::SLOTS);
         check("scan.wgsl", ScanBindings::SLOTS);
@@ -897,11 +932,12 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 12] = [
+        let passes: [(&str, &[(&str, Kind)]); 13] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
             ("ranges.wgsl", RangesBindings::SLOTS),
+            ("shadow_pyramid.wgsl", ShadowPyramidBindings::SLOTS),
             ("cull.wgsl", CullBindings::SLOTS),
             ("voxelize.wgsl", VoxelizeBindings::SLOTS),
             ("scan.wgsl", ScanBindings::SLOTS),

@@ -13,6 +13,8 @@ pub enum Pass {
     Surface,
     /// The bins' z range fitted to the visible depth.
     Ranges,
+    /// The farthest first hit over blocks of the directional shadow map (Cull's hidden triangles).
+    ShadowPyramid,
     /// The triangles that can shadow a visible point, and Voxelize's work list.
     Cull,
     /// The geometry bits of the epipolar grid.
@@ -31,10 +33,11 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass, in frame order.
-    pub const ALL: [Pass; 10] = [
+    pub const ALL: [Pass; 11] = [
         Pass::ShadowMap,
         Pass::Surface,
         Pass::Ranges,
+        Pass::ShadowPyramid,
         Pass::Cull,
         Pass::Voxelize,
         Pass::Scan,
@@ -50,6 +53,7 @@ impl Pass {
             Pass::ShadowMap => "shadow_map",
             Pass::Surface => "surface",
             Pass::Ranges => "ranges",
+            Pass::ShadowPyramid => "shadow_pyramid",
             Pass::Cull => "cull",
             Pass::Voxelize => "voxelize",
             Pass::Scan => "scan",
@@ -67,7 +71,10 @@ impl Pass {
 
     /// Whether the pass belongs to the voxel pipeline (skipped when nothing scatters).
     pub fn is_voxel(self) -> bool {
-        matches!(self, Pass::Ranges | Pass::Cull | Pass::Voxelize | Pass::Scan | Pass::ScatterTable)
+        matches!(
+            self,
+            Pass::Ranges | Pass::ShadowPyramid | Pass::Cull | Pass::Voxelize | Pass::Scan | Pass::ScatterTable
+        )
     }
 }
 

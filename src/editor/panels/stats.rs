@@ -69,8 +69,8 @@ pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
     ));
     let t = &p.triangles;
     v.push(format!(
-        "triangles voxelized: {} of {} (dropped {} outside the view, {} beyond the visible depth, {} solids' faces away from the light)",
-        t.kept, p.triangles_total, t.culled_view, t.culled_depth, t.culled_back
+        "triangles voxelized: {} of {} (dropped {} outside the view, {} beyond the visible depth, {} solids' faces away from the light, {} hidden from the light)",
+        t.kept, p.triangles_total, t.culled_view, t.culled_depth, t.culled_back, t.culled_hidden
     ));
     v
 }

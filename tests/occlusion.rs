@@ -1,0 +1,73 @@
+//! Under a directional light, Cull drops the triangles the shadow map shows behind nearer surfaces
+//! at every texel around them (`epivox::render::ShadowPyramid`): their bits would change nothing
+//! after the scan, so the shadow volume must come out the same, bit for bit, where no occluder
+//! has a gap narrower than a shadow-map texel (the scene below has none).
+
+mod common;
+
+use common::renderer;
+use epivox::params::{Grid, Light};
+use epivox::render::{Method, Pass};
+use epivox::scene::build::quad;
+use glam::Vec3;
+
+/// The procedural room of 64 closed spheres with a roof over half of it instead of its ceiling,
+/// the sun high above: the spheres under the roof are hidden from it.
+fn half_roofed_room() -> epivox::scene::Scene {
+    let mut room = epivox::bench::procedural_scene(20_000);
+    let Some(ceiling) = room.meshes.iter().position(|m| m.name == "ceiling") else {
+        panic!("the procedural room has no ceiling")
+    };
+    let b = room.meshes[ceiling].bounds();
+    let h = (b.max - b.min) * 0.5;
+    room.meshes[ceiling] =
+        quad("roof", Vec3::new(b.min.x + 0.5 * h.x, b.max.y, b.center().z), Vec3::X * 0.5 * h.x, Vec3::Z * h.z);
+    room.light = Light::Directional { direction: Vec3::new(0.15, 1.0, 0.1).normalize(), irradiance: Vec3::splat(3.0) };
+    room.grid = Grid { planes: 256, rays: 256, bins: 128, ..Grid::default() };
+    room
+}
+
+#[test]
+fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
+    let Some(mut r) = renderer() else { return };
+    let room = half_roofed_room();
+    let spheres: usize = room.meshes.iter().filter(|m| m.name.starts_with("sphere")).map(|m| m.triangles.len()).sum();
+    let mut runs = Vec::new();
+    for occlusion in [true, false] {
+        r.occlusion_culling = occlusion;
+        let out = r.render(&room, 160, 120, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        let counts = r.cull_counts().unwrap_or_else(|e| panic!("{e}"));
+        let grid = r.read_grid().unwrap_or_else(|e| panic!("{e}"));
+        runs.push((out, counts, grid));
+    }
+    let (on, off) = (&runs[0], &runs[1]);
+    eprintln!("with the test: {:?}; without: {:?}; {spheres} sphere triangles", on.1, off.1);
+    assert!(on.0.passes.contains(&Pass::ShadowPyramid), "the pyramid did not run: {:?}", on.0.passes);
+    assert!(!off.0.passes.contains(&Pass::ShadowPyramid), "the pyramid ran with the test off");
+    assert_eq!(off.1.culled_hidden, 0);
+    // About half the spheres lie under the roof; a quarter of all sphere triangles at least (most
+    // of those under it face the light, the rest are culled as back faces first).
+    assert!(
+        on.1.culled_hidden as usize > spheres / 8,
+        "only {} of {spheres} sphere triangles were culled as hidden",
+        on.1.culled_hidden
+    );
+    assert!(on.1.items < off.1.items, "culling removed no work: {} against {} items", on.1.items, off.1.items);
+    let differing = on.2.iter().zip(&off.2).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} words of the shadow volume differ");
+    assert!(on.0.scatter.pixels == off.0.scatter.pixels, "the scattered light differs");
+}
+
+#[test]
+fn point_lights_and_no_pruning_skip_the_test() {
+    let Some(mut r) = renderer() else { return };
+    let mut room = half_roofed_room();
+    r.prune = false;
+    r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled with pruning off");
+    r.prune = true;
+    room.light = common::point_light(Vec3::new(0.5, 3.0, 0.2));
+    let out = r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!out.passes.contains(&Pass::ShadowPyramid));
+    assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled under a point light");
+}
