@@ -1,7 +1,8 @@
 //! Under a directional light, Cull drops the triangles the shadow map shows behind nearer surfaces
 //! at every texel around them (`epivox::render::ShadowPyramid`): their bits would change nothing
 //! after the scan, so the shadow volume must come out the same, bit for bit, where no occluder
-//! has a gap narrower than a shadow-map texel (the scene below has none).
+//! has a gap narrower than a shadow-map texel (the scene below has none). The test is on by default
+//! on GPUs and off on CPU adapters (`Renderer::occlusion_culling`); these tests turn it on.
 
 mod common;
 
@@ -62,6 +63,8 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
 fn point_lights_and_no_pruning_skip_the_test() {
     let Some(mut r) = renderer() else { return };
     let mut room = half_roofed_room();
+    // On, as on a GPU (a CPU adapter's default is off: Renderer::occlusion_culling).
+    r.occlusion_culling = true;
     r.prune = false;
     r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled with pruning off");

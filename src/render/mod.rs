@@ -236,8 +236,12 @@ pub struct Renderer {
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
-    /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and on
-    /// its own only to compare, `tests/occlusion.rs`).
+    /// all around them ([`ShadowPyramid`]; part of pruning, off with `prune`). On by default on a
+    /// GPU, off on a CPU adapter: on llvmpipe it took the classroom's Voxelize from 86 to 73 ms
+    /// but the frame came out no faster (235.6 against 239.2 ms, 8 alternating rounds), because
+    /// reading the map makes the frame wait for its rasterization, which otherwise runs on
+    /// llvmpipe's raster threads beside Cull and Voxelize (docs/results.md, session 17). On a GPU
+    /// the map is long finished when Cull runs; not measured there. `tests/occlusion.rs` turns it on.
     pub occlusion_culling: bool,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
@@ -278,13 +282,14 @@ impl Renderer {
         let frame_buffer = uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>());
         let shadow_uniforms = uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>());
         let timer = GpuTimer::new(&ctx);
+        let occlusion_culling = ctx.info.device_type != wgpu::DeviceType::Cpu;
         Ok(Renderer {
             ctx,
             passes,
             prune: true,
             shadow_face_culling: true,
             back_face_culling: true,
-            occlusion_culling: true,
+            occlusion_culling,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -644,11 +649,11 @@ impl Renderer {
                     p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
                     f.mark(Pass::Ranges);
                 }
+                f.enc.clear_buffer(bits, 0, None);
                 if u.work.z > 0 {
                     p.shadow_pyramid.record(&mut f.enc);
                     f.mark(Pass::ShadowPyramid);
                 }
-                f.enc.clear_buffer(bits, 0, None);
                 p.cull.begin_frame(&mut f.enc);
                 // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
                 for chunk in 0..p.cull.chunks() {
