@@ -1,8 +1,9 @@
 //! Under a directional light, Cull drops the triangles the shadow map shows behind nearer surfaces
 //! at every texel around them (`epivox::render::ShadowPyramid`): their bits would change nothing
 //! after the scan, so the shadow volume must come out the same, bit for bit, where no occluder
-//! has a gap narrower than a shadow-map texel (the scene below has none). The test is on by default
-//! on GPUs and off on CPU adapters (`Renderer::occlusion_culling`); these tests turn it on.
+//! has a gap narrower than a shadow-map texel (the scene below has none). Cull reads the pyramid an
+//! earlier frame with the same map left (`ShadowPyramid::built_from`): the first frame after the
+//! light or the geometry changed culls nothing.
 
 mod common;
 
@@ -33,44 +34,60 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
     let Some(mut r) = renderer() else { return };
     let room = half_roofed_room();
     let spheres: usize = room.meshes.iter().filter(|m| m.name.starts_with("sphere")).map(|m| m.triangles.len()).sum();
-    let mut runs = Vec::new();
-    for occlusion in [true, false] {
-        r.occlusion_culling = occlusion;
-        let out = r.render(&room, 160, 120, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let frame = |r: &mut epivox::render::Renderer, scene: &epivox::scene::Scene| {
+        let out = r.render(scene, 160, 120, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         let counts = r.cull_counts().unwrap_or_else(|e| panic!("{e}"));
         let grid = r.read_grid().unwrap_or_else(|e| panic!("{e}"));
-        runs.push((out, counts, grid));
-    }
-    let (on, off) = (&runs[0], &runs[1]);
+        (out, counts, grid)
+    };
+    // The first frame has no pyramid yet: it culls nothing and makes one at its end.
+    let first = frame(&mut r, &room);
+    assert_eq!(first.1.culled_hidden, 0, "the first frame culled with no pyramid");
+    assert!(first.0.passes.contains(&Pass::ShadowPyramid), "the first frame made no pyramid: {:?}", first.0.passes);
+    let on = frame(&mut r, &room);
+    assert!(!on.0.passes.contains(&Pass::ShadowPyramid), "the same map's pyramid was made again");
+    r.occlusion_culling = false;
+    let off = frame(&mut r, &room);
     eprintln!("with the test: {:?}; without: {:?}; {spheres} sphere triangles", on.1, off.1);
-    assert!(on.0.passes.contains(&Pass::ShadowPyramid), "the pyramid did not run: {:?}", on.0.passes);
-    assert!(!off.0.passes.contains(&Pass::ShadowPyramid), "the pyramid ran with the test off");
     assert_eq!(off.1.culled_hidden, 0);
-    // About half the spheres lie under the roof; a quarter of all sphere triangles at least (most
-    // of those under it face the light, the rest are culled as back faces first).
+    assert!(!off.0.passes.contains(&Pass::ShadowPyramid), "the pyramid was made with the test off");
+    // About half the spheres lie under the roof; an eighth of all sphere triangles at least (the
+    // faces of those under it that face the light: the rest are culled as back faces first).
     assert!(
         on.1.culled_hidden as usize > spheres / 8,
         "only {} of {spheres} sphere triangles were culled as hidden",
         on.1.culled_hidden
     );
     assert!(on.1.items < off.1.items, "culling removed no work: {} against {} items", on.1.items, off.1.items);
-    let differing = on.2.iter().zip(&off.2).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{differing} words of the shadow volume differ");
-    assert!(on.0.scatter.pixels == off.0.scatter.pixels, "the scattered light differs");
+    for other in [&first, &off] {
+        let differing = on.2.iter().zip(&other.2).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "{differing} words of the shadow volume differ");
+        assert!(on.0.scatter.pixels == other.0.scatter.pixels, "the scattered light differs");
+    }
+    // A new light direction draws another map: one frame without the test, then with it again.
+    r.occlusion_culling = true;
+    let mut turned = room.clone();
+    turned.light =
+        Light::Directional { direction: Vec3::new(-0.1, 1.0, 0.15).normalize(), irradiance: Vec3::splat(3.0) };
+    assert_eq!(frame(&mut r, &turned).1.culled_hidden, 0, "the old light's pyramid was used for the new light");
+    assert!(frame(&mut r, &turned).1.culled_hidden > 0, "the new light's pyramid culled nothing");
 }
 
 #[test]
 fn point_lights_and_no_pruning_skip_the_test() {
     let Some(mut r) = renderer() else { return };
     let mut room = half_roofed_room();
-    // On, as on a GPU (a CPU adapter's default is off: Renderer::occlusion_culling).
-    r.occlusion_culling = true;
     r.prune = false;
-    r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled with pruning off");
+    for _ in 0..2 {
+        let out = r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!out.passes.contains(&Pass::ShadowPyramid));
+        assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled with pruning off");
+    }
     r.prune = true;
     room.light = common::point_light(Vec3::new(0.5, 3.0, 0.2));
-    let out = r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-    assert!(!out.passes.contains(&Pass::ShadowPyramid));
-    assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled under a point light");
+    for _ in 0..2 {
+        let out = r.render(&room, 64, 48, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!out.passes.contains(&Pass::ShadowPyramid));
+        assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled under a point light");
+    }
 }

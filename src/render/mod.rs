@@ -236,13 +236,14 @@ pub struct Renderer {
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
-    /// all around them ([`ShadowPyramid`]; part of pruning, off with `prune`). On by default on a
-    /// GPU, off on a CPU adapter: on llvmpipe it took the classroom's Voxelize from 86 to 73 ms
-    /// but the frame came out no faster (235.6 against 239.2 ms, 8 alternating rounds), because
-    /// reading the map makes the frame wait for its rasterization, which otherwise runs on
-    /// llvmpipe's raster threads beside Cull and Voxelize (docs/results.md, session 17). On a GPU
-    /// the map is long finished when Cull runs; not measured there. `tests/occlusion.rs` turns it on.
+    /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
+    /// on its own only to compare, `tests/occlusion.rs`). It reads the pyramid of an earlier frame
+    /// whose map had the same inputs (the light, the geometry, the map's size): the frame after a
+    /// change runs without it and reduces its own map at its end.
     pub occlusion_culling: bool,
+    /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
+    /// for the frames after it ([`ShadowPyramid::key`]; set by `prepare`).
+    pyramid_to_build: Option<Vec<u8>>,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -282,14 +283,14 @@ impl Renderer {
         let frame_buffer = uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>());
         let shadow_uniforms = uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>());
         let timer = GpuTimer::new(&ctx);
-        let occlusion_culling = ctx.info.device_type != wgpu::DeviceType::Cpu;
         Ok(Renderer {
             ctx,
             passes,
             prune: true,
             shadow_face_culling: true,
             back_face_culling: true,
-            occlusion_culling,
+            occlusion_culling: true,
+            pyramid_to_build: None,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -582,14 +583,27 @@ impl Renderer {
             let ctx = self.ctx.clone();
             ctx.scoped("binding the passes", || self.rebind())?;
         }
+        let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
+        // The test of hidden triangles (a directional light's map, pruning on, a frame that
+        // voxelizes) reads the pyramid a frame with the same map left: the frame after the light
+        // or the geometry changed runs without it and reduces its map at its end, when the map is
+        // long drawn (reading it before Cull would make the frame wait for its rasterization).
+        let occlusion = self.prune
+            && self.occlusion_culling
+            && !setup.frame.is_point()
+            && !matches!(method, Method::Raymarch { .. })
+            && scene.needs_scattering();
+        let key = match (&self.geometry, occlusion) {
+            (Some(g), true) => Some(ShadowPyramid::key(g.fingerprint, &shadow_lookup, self.back_face_culling)),
+            _ => None,
+        };
+        let pyramid = &self.passes.shadow_pyramid;
+        let ready = key.is_some() && pyramid.built_from == key;
+        let levels = if ready { pyramid.bound_coarsest() } else { 0 };
+        self.pyramid_to_build = if ready { None } else { key };
         let v = &self.passes.voxelize;
-        // The test of hidden triangles: a directional light's map, pruning on (the pyramid is bound
-        // with the map, above).
-        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
-        let levels = if occlusion { self.passes.shadow_pyramid.bound_coarsest() } else { 0 };
         setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
-        let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
         Ok((setup, variant))
     }
@@ -650,10 +664,6 @@ impl Renderer {
                     f.mark(Pass::Ranges);
                 }
                 f.enc.clear_buffer(bits, 0, None);
-                if u.work.z > 0 {
-                    p.shadow_pyramid.record(&mut f.enc);
-                    f.mark(Pass::ShadowPyramid);
-                }
                 p.cull.begin_frame(&mut f.enc);
                 // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
                 for chunk in 0..p.cull.chunks() {
@@ -677,8 +687,17 @@ impl Renderer {
         }
         p.composite.record(&mut f.enc, v, width, height);
         f.mark(Pass::Composite);
+        // For the frames after this one, while its map's inputs stay the same.
+        let build = self.pyramid_to_build.take();
+        if build.is_some() {
+            p.shadow_pyramid.record(&mut f.enc);
+            f.mark(Pass::ShadowPyramid);
+        }
         let done = self.finish(f, setup, v);
         self.timer = timer;
+        if done.is_ok() && build.is_some() {
+            self.passes.shadow_pyramid.built_from = build;
+        }
         done
     }
 

@@ -13,8 +13,6 @@ pub enum Pass {
     Surface,
     /// The bins' z range fitted to the visible depth.
     Ranges,
-    /// The farthest first hit over blocks of the directional shadow map (Cull's hidden triangles).
-    ShadowPyramid,
     /// The triangles that can shadow a visible point, and Voxelize's work list.
     Cull,
     /// The geometry bits of the epipolar grid.
@@ -29,6 +27,9 @@ pub enum Pass {
     Raymarch,
     /// Surface radiance attenuated along the view ray, plus the in-scattering.
     Composite,
+    /// The farthest first hit over blocks of the directional shadow map, for the next frames'
+    /// Cull (hidden triangles), after a frame whose map's inputs changed.
+    ShadowPyramid,
 }
 
 impl Pass {
@@ -37,7 +38,6 @@ impl Pass {
         Pass::ShadowMap,
         Pass::Surface,
         Pass::Ranges,
-        Pass::ShadowPyramid,
         Pass::Cull,
         Pass::Voxelize,
         Pass::Scan,
@@ -45,6 +45,7 @@ impl Pass {
         Pass::Integrate,
         Pass::Raymarch,
         Pass::Composite,
+        Pass::ShadowPyramid,
     ];
 
     /// The name in reports, JSON keys and CSV columns (`shadow_map`).

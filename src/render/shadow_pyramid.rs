@@ -10,6 +10,13 @@
 //! room are such, under its roof. Approximate only where an occluder has a gap narrower than a texel
 //! between texel centres (docs/pruning.md).
 //!
+//! The pyramid is made at the end of a frame, for the frames after it: a later frame whose map has
+//! the same inputs ([`ShadowPyramid::key`]: the geometry, the light's matrices, the size) draws the
+//! same map, so its Cull reads this one, and the frame never waits for its own map's
+//! rasterization (on llvmpipe, which draws it on its raster threads beside Cull and Voxelize, that
+//! wait cost what the culling saved: docs/results.md, session 17). The frame after the light or the
+//! geometry changed runs without the test and makes the pyramid anew.
+//!
 //! Directional lights only: the cube map of a point light is not reduced (its Cull keeps every
 //! triangle the other tests keep).
 
@@ -47,6 +54,9 @@ pub struct ShadowPyramid {
     pub pyramid: Option<wgpu::Buffer>,
     /// The map size the pyramid and its bind groups were made for, and one bind group per level.
     bound: Option<(u32, Vec<(wgpu::BindGroup, u32)>)>,
+    /// What the map the pyramid holds was drawn from ([`ShadowPyramid::key`]), once built: a later
+    /// frame whose map has the same inputs draws the same map, and Cull reads the pyramid as it is.
+    pub built_from: Option<Vec<u8>>,
 }
 
 impl ShadowPyramid {
@@ -82,7 +92,18 @@ impl ShadowPyramid {
             layout,
             pyramid: None,
             bound: None,
+            built_from: None,
         })
+    }
+
+    /// The inputs of a directional shadow map, as bytes to compare: the scene's geometry (its
+    /// fingerprint), the map's matrices and parameters (the light's direction, the casters'
+    /// rectangle, the size) and whether solids draw one side.
+    pub fn key(geometry: u64, shadow: &super::ShadowUniforms, one_sided: bool) -> Vec<u8> {
+        let mut k = geometry.to_le_bytes().to_vec();
+        k.extend_from_slice(bytemuck::bytes_of(shadow));
+        k.push(one_sided as u8);
+        k
     }
 
     /// The coarsest level a map of `size` texels per side gets (a level has at least one texel);
@@ -117,6 +138,7 @@ impl ShadowPyramid {
         let params = Self::level_params(size);
         let floats = params.last().map_or(1, |l| l.dst_offset + l.dst_size * l.dst_size);
         if self.pyramid.as_ref().is_none_or(|b| b.size() != floats as u64 * 4) {
+            self.built_from = None;
             self.pyramid = Some(device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("ShadowPyramid::pyramid"),
                 size: floats as u64 * 4,
