@@ -24,6 +24,7 @@
 
 #import common
 #import triangle_bounds
+#import hidden
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
@@ -57,8 +58,6 @@ var<private> f: Frame;
 const BLOCK: u32 = 1024u;     // kept triangles per offsets_local workgroup (64 threads x 16)
 const VOXEL_GROUP: u32 = 64u; // Voxelize's workgroup size
 const MAX_GROUPS: u32 = 65535u;
-// The shadow pyramid's finest level (ShadowPyramid::FIRST_LEVEL): blocks of 4x4 texels.
-const PYRAMID_FIRST_LEVEL: u32 = 2u;
 
 // Bins whose sample lies in [z.x, z.y], as a word range (first, count); count 0 when none.
 // Samples sit a quarter bin either side of the centres (bin_offset), and a quarter bin of margin
@@ -75,58 +74,11 @@ fn word_range(z: vec2f) -> vec2u {
     return vec2u(w0, w1 - w0 + 1u);
 }
 
-// Whether the directional shadow map shows the triangle behind nearer surfaces all around it:
-// its nearest depth (an orthographic depth is linear, so a vertex's) lies beyond the farthest
-// depth over the map's texels within one texel of its footprint, read as at most 3x3 texels of the
-// first pyramid level whose blocks are that coarse. Every light ray through the triangle then
-// meets a nearer surface first, at a smaller gamma, and after the scan the triangle's bits would
-// change nothing (up to an occluder's gap narrower than a texel between texel centres, which the
-// map cannot see: docs/pruning.md). Triangles reaching past the map's edge, or wider than the
-// coarsest level's blocks, are kept.
+// Whether the sun's shadow map shows the triangle hidden (hidden.wgsl), from the pyramid of an
+// earlier frame with the same map (f.work.z: its coarsest level, 0 when there is none).
 fn hidden_from_light(p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
-    let coarsest = f.work.z;
-    if (POINT_LIGHT || coarsest == 0u) { return false; }
-    let m = shadow.view_proj[0];
-    let c0 = (m * vec4f(p0, 1.0)).xyz;
-    let c1 = (m * vec4f(p1, 1.0)).xyz;
-    let c2 = (m * vec4f(p2, 1.0)).xyz;
-    let n = shadow.params.x;
-    // Texel coordinates, as shadow_lookup.wgsl's: texel i spans [i, i + 1).
-    let t0 = vec2f(c0.x * 0.5 + 0.5, 0.5 - c0.y * 0.5) * n;
-    let t1 = vec2f(c1.x * 0.5 + 0.5, 0.5 - c1.y * 0.5) * n;
-    let t2 = vec2f(c2.x * 0.5 + 0.5, 0.5 - c2.y * 0.5) * n;
-    // The texels the footprint touches and a ring of one around them.
-    let lo = floor(min(t0, min(t1, t2))) - 1.0;
-    let hi = floor(max(t0, max(t1, t2))) + 1.0;
-    if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
-    let a = vec2u(lo);
-    let b = vec2u(hi);
-    // The first level whose blocks hold the range in three per side, and where it starts.
-    var level = PYRAMID_FIRST_LEVEL;
-    var offset = 0u;
-    let size = u32(n);
-    loop {
-        if (all((b >> vec2u(level)) - (a >> vec2u(level)) <= vec2u(2u))) { break; }
-        if (level >= coarsest) { return false; }
-        let side = (size + (1u << level) - 1u) >> level;
-        offset += side * side;
-        level++;
-    }
-    let side = (size + (1u << level) - 1u) >> level;
-    let i = a >> vec2u(level);
-    let j = b >> vec2u(level);
-    let mid = min(i + 1u, j);
-    // Rows i, mid and j (the same row twice where the range holds fewer).
-    let r0 = offset + i.y * side;
-    let r1 = offset + mid.y * side;
-    let r2 = offset + j.y * side;
-    let far = max(
-        max(max(pyramid[r0 + i.x], pyramid[r0 + mid.x]), max(pyramid[r0 + j.x], pyramid[r1 + i.x])),
-        max(max(pyramid[r1 + mid.x], pyramid[r1 + j.x]), max(max(pyramid[r2 + i.x], pyramid[r2 + mid.x]), pyramid[r2 + j.x])),
-    );
-    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
-    // texel centre may round below its vertices' minimum.
-    return far < min(c0.z, min(c1.z, c2.z)) - 4e-6;
+    if (POINT_LIGHT) { return false; }
+    return hidden_in_pyramid(shadow.view_proj[0], shadow.params.x, f.work.z, p0, p1, p2);
 }
 
 // Why a triangle is dropped, or its record and items.

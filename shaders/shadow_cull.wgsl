@@ -1,5 +1,6 @@
 // shadow_cull.wgsl: which faces of a point light's cube shadow map each triangle can touch, so
-// that each face draws only those (ShadowMap pass, point lights; `src/render/shadow_map.rs`).
+// that each face draws only those (`main`), and which triangles the sun's map needs at all (`sun`)
+// (ShadowMap pass; `src/render/shadow_map.rs`).
 //
 // Face k looks along axis c = k / 2 with sign s (+X, -X, +Y, -Y, +Z, -Z, the order of the faces'
 // matrices). With q = P - L, its 90-degree pyramid is s q_c >= |q_u| and s q_c >= |q_v| for the
@@ -8,12 +9,23 @@
 // (conservative: a kept triangle the face's frustum then clips costs only its vertices). Kept
 // triangles' indices are appended to face k's region of `lists` and counted into its
 // DrawIndexedIndirect arguments.
+//
+// `sun`: a directional map draws, into region 0, the triangles that are not a solid's faces away
+// from the light and that the pyramid of an earlier frame with the same map does not show hidden
+// (hidden.wgsl): at every texel centre such a triangle covers, the map holds a nearer depth, so
+// the map drawn without them is the same map, bit for bit, and its binning (single-threaded on
+// llvmpipe) has fewer triangles to set up.
+
+#import hidden
 
 struct ShadowCull {
-    // xyz: the light's position.
+    // xyz: the light's position (point) or the direction toward it (sun).
     light: vec4f,
-    // x: triangles, y: indices per region (the scene's index count), zw: unused.
+    // x: triangles, y: indices per region (the scene's index count), z: the pyramid's coarsest
+    // level (sun; 0: none), w: the sun map's texels per side.
     counts: vec4u,
+    // The sun map's view-projection.
+    view_proj: mat4x4f,
 }
 
 @group(0) @binding(0) var<storage, read> cull_in: ShadowCull;
@@ -30,6 +42,8 @@ struct ShadowCull {
 // Per mesh: +1 keep only the faces whose winding normal (b - a) x (c - a) faces the light, -1
 // only those facing away, 0 all (SceneGpu::light_sides).
 @group(0) @binding(6) var<storage, read> sides: array<f32>;
+// The sun map's pyramid of block maxima (shadow_pyramid.wgsl), for `sun`.
+@group(0) @binding(7) var<storage, read> pyramid: array<f32>;
 
 fn position(i: u32) -> vec3f {
     return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
@@ -69,4 +83,24 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
         lists[base + 1u] = i1;
         lists[base + 2u] = i2;
     }
+}
+
+@compute @workgroup_size(64)
+fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let t = id.x + id.y * groups.x * 64u;
+    if (t >= cull_in.counts.x) { return; }
+    let i0 = indices[3u * t];
+    let i1 = indices[3u * t + 1u];
+    let i2 = indices[3u * t + 2u];
+    let p0 = position(i0);
+    let p1 = position(i1);
+    let p2 = position(i2);
+    // A solid's face away from the sun (Cull's test); edge-on faces (dot 0) are kept.
+    if (sides[triangle_meshes[t]] * dot(cross(p1 - p0, p2 - p0), cull_in.light.xyz) < 0.0) { return; }
+    let c = cull_in.counts;
+    if (hidden_in_pyramid(cull_in.view_proj, f32(c.w), c.z, p0, p1, p2)) { return; }
+    let at = atomicAdd(&args[0], 3u);
+    lists[at] = i0;
+    lists[at + 1u] = i1;
+    lists[at + 2u] = i2;
 }

@@ -1,7 +1,8 @@
 //! Under a directional light, Cull drops the triangles the shadow map shows behind nearer surfaces
 //! at every texel around them (`epivox::render::ShadowPyramid`): their bits would change nothing
 //! after the scan, so the shadow volume must come out the same, bit for bit, where no occluder
-//! has a gap narrower than a shadow-map texel (the scene below has none). Cull reads the pyramid an
+//! has a gap narrower than a shadow-map texel (the scene below has none). The map itself leaves
+//! them out too (they cannot win its depth test), for every method: the same map, bit for bit. Cull reads the pyramid an
 //! earlier frame with the same map left (`ShadowPyramid::built_from`): the first frame after the
 //! light or the geometry changed culls nothing.
 
@@ -63,6 +64,8 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
         let differing = on.2.iter().zip(&other.2).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{differing} words of the shadow volume differ");
         assert!(on.0.scatter.pixels == other.0.scatter.pixels, "the scattered light differs");
+        // The shadow map drawn without the hidden triangles is the same map: the lit surfaces too.
+        assert!(on.0.hdr.pixels == other.0.hdr.pixels, "the final image differs");
     }
     // A new light direction draws another map: one frame without the test, then with it again.
     r.occlusion_culling = true;
@@ -90,4 +93,18 @@ fn point_lights_and_no_pruning_skip_the_test() {
         assert!(!out.passes.contains(&Pass::ShadowPyramid));
         assert_eq!(r.cull_counts().unwrap_or_else(|e| panic!("{e}")).culled_hidden, 0, "culled under a point light");
     }
+}
+
+#[test]
+fn the_march_sees_the_same_map_without_the_hidden_triangles() {
+    let Some(mut r) = renderer() else { return };
+    let room = half_roofed_room();
+    let march = Method::Raymarch { steps: 32, jitter: false };
+    // The first frame makes the pyramid; the second draws the map without the hidden triangles.
+    let first = r.render(&room, 96, 72, march).unwrap_or_else(|e| panic!("{e}"));
+    assert!(first.passes.contains(&Pass::ShadowPyramid), "no pyramid after the march's first frame");
+    let second = r.render(&room, 96, 72, march).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!second.passes.contains(&Pass::ShadowPyramid));
+    assert!(first.hdr.pixels == second.hdr.pixels, "the final image differs");
+    assert!(first.scatter.pixels == second.scatter.pixels, "the marched light differs");
 }

@@ -25,11 +25,12 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("cull.wgsl", include_str!("../../shaders/cull.wgsl")),
     ("triangle_bounds.wgsl", include_str!("../../shaders/triangle_bounds.wgsl")),
     ("shadow_lookup.wgsl", include_str!("../../shaders/shadow_lookup.wgsl")),
+    ("hidden.wgsl", include_str!("../../shaders/hidden.wgsl")),
     ("raymarch.wgsl", include_str!("../../shaders/raymarch.wgsl")),
 ];
 
 /// The files that only declare things for others to `#import` (validated through their users).
-pub const IMPORTED_ONLY: &[&str] = &["common.wgsl", "triangle_bounds.wgsl", "shadow_lookup.wgsl"];
+pub const IMPORTED_ONLY: &[&str] = &["common.wgsl", "triangle_bounds.wgsl", "shadow_lookup.wgsl", "hidden.wgsl"];
 
 /// A shader that failed to load, compose or validate.
 #[derive(Debug, Clone, thiserror::Error)]

@@ -244,6 +244,8 @@ pub struct Renderer {
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it ([`ShadowPyramid::key`]; set by `prepare`).
     pyramid_to_build: Option<Vec<u8>>,
+    /// This frame's coarsest pyramid level the hidden-triangle tests read (0: none; `prepare`).
+    hidden_levels: u32,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -291,6 +293,7 @@ impl Renderer {
             back_face_culling: true,
             occlusion_culling: true,
             pyramid_to_build: None,
+            hidden_levels: 0,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -508,14 +511,13 @@ impl Renderer {
         use wgpu::BindingResource as R;
         let frame = || self.frame_buffer.as_entire_binding();
         let shadow = || self.shadow_uniforms.as_entire_binding();
-        p.shadow_map.bind(d, &geometry.gpu);
+        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, p.shadow_map.size);
+        let Some(pyramid) = &p.shadow_pyramid.pyramid else { return };
+        p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
         p.surface.bind(d, SurfaceBindings { frame_in: frame() });
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
-        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, p.shadow_map.size);
-        if let Some(pyramid) = &p.shadow_pyramid.pyramid {
-            p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
-        }
+        p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
         p.scan.bind(d, ScanBindings { frame_in: frame(), grid: bits.as_entire_binding() });
         p.scatter_table.bind(d, &self.frame_buffer);
@@ -584,15 +586,12 @@ impl Renderer {
             ctx.scoped("binding the passes", || self.rebind())?;
         }
         let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
-        // The test of hidden triangles (a directional light's map, pruning on, a frame that
-        // voxelizes) reads the pyramid a frame with the same map left: the frame after the light
-        // or the geometry changed runs without it and reduces its map at its end, when the map is
-        // long drawn (reading it before Cull would make the frame wait for its rasterization).
-        let occlusion = self.prune
-            && self.occlusion_culling
-            && !setup.frame.is_point()
-            && !matches!(method, Method::Raymarch { .. })
-            && scene.needs_scattering();
+        // The test of hidden triangles (a directional light's map, pruning on) reads the pyramid a
+        // frame with the same map left: the frame after the light or the geometry changed runs
+        // without it and reduces its map at its end, when the map is long drawn (reading it before
+        // Cull would make the frame wait for its rasterization). Cull and the map's own list
+        // (every method's) leave the hidden triangles out.
+        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
         let key = match (&self.geometry, occlusion) {
             (Some(g), true) => Some(ShadowPyramid::key(g.fingerprint, &shadow_lookup, self.back_face_culling)),
             _ => None,
@@ -601,6 +600,7 @@ impl Renderer {
         let ready = key.is_some() && pyramid.built_from == key;
         let levels = if ready { pyramid.bound_coarsest() } else { 0 };
         self.pyramid_to_build = if ready { None } else { key };
+        self.hidden_levels = levels;
         let v = &self.passes.voxelize;
         setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
@@ -642,7 +642,11 @@ impl Renderer {
         let ahead = 2.0 * near.max(1e-4);
         let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
         // The frame: an ordered list of passes.
-        let culling = ShadowCulling { faces: self.shadow_face_culling, light_facing: g.light_facing() };
+        let culling = ShadowCulling {
+            faces: self.shadow_face_culling,
+            hidden: self.hidden_levels,
+            light_facing: g.light_facing(),
+        };
         p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
         f.mark(Pass::ShadowMap);
         let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
@@ -879,7 +883,7 @@ mod layout_tests {
         check(
             "shadow_cull.wgsl",
             "ShadowCull",
-            fields!(ShadowCullUniforms: light, counts),
+            fields!(ShadowCullUniforms: light, counts, view_proj),
             size_of::<ShadowCullUniforms>(),
         );
         check(

@@ -39,6 +39,7 @@ bindings! {
         args: Kind::StorageRw,
         triangle_meshes: Kind::Storage,
         sides: Kind::Storage,
+        pyramid: Kind::Storage,
     }
 }
 
@@ -46,17 +47,21 @@ bindings! {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct ShadowCullUniforms {
-    /// xyz: the light's position.
+    /// xyz: the light's position (point) or the direction toward it (sun).
     pub light: Vec4,
-    /// x: triangles, y: indices per face region (the scene's index count).
+    /// x: triangles, y: indices per face region (the scene's index count), z: the pyramid's
+    /// coarsest level the sun list may read (0: none), w: the sun map's texels per side.
     pub counts: [u32; 4],
+    /// The sun map's view-projection.
+    pub view_proj: Mat4,
 }
 
 /// What face culling holds for one scene's geometry.
 struct FaceLists {
     /// The scene index buffer the lists were made for (they are remade only when it changes,
-    /// not when the image or the grid does).
+    /// not when the image or the grid does), and the sun's pyramid they read.
     source: wgpu::Buffer,
+    pyramid: wgpu::Buffer,
     /// Six regions of the scene's index count; face k's starts at `k * index_count`.
     lists: wgpu::Buffer,
     /// Six DrawIndexedIndirect arguments, reset from `args_init` each frame.
@@ -69,8 +74,12 @@ struct FaceLists {
 
 /// What [`ShadowMap::record`] leaves out.
 pub struct ShadowCulling<'a> {
-    /// Point light: each face draws only the triangles that can reach it.
+    /// Point light: each cube face draws only the triangles that can reach it. Sun: the map draws
+    /// a list of the triangles it needs (solids' faces toward the light, and not hidden).
     pub faces: bool,
+    /// Sun: the coarsest level of a pyramid made from a map with this frame's inputs, whose hidden
+    /// triangles the list leaves out (0: none; [`super::ShadowPyramid`]).
+    pub hidden: u32,
     /// Per mesh: the faces the light can see first ([`SceneGpu::update_light_facing`]).
     pub light_facing: &'a [Facing],
 }
@@ -109,6 +118,8 @@ pub struct ShadowMap {
     faces: Vec<(wgpu::Buffer, wgpu::BindGroup, wgpu::TextureView)>,
     cull_layout: wgpu::BindGroupLayout,
     cull_pipeline: wgpu::ComputePipeline,
+    /// The sun's list (`sun` in shadow_cull.wgsl).
+    sun_pipeline: wgpu::ComputePipeline,
     cull_uniforms: wgpu::Buffer,
     /// `None` until bound, or when the lists would not fit a storage binding.
     face_lists: Option<FaceLists>,
@@ -169,14 +180,18 @@ impl ShadowMap {
             bind_group_layouts: &[Some(&cull_layout)],
             immediate_size: 0,
         });
-        let cull_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("ShadowMap::cull_pipeline"),
-            layout: Some(&cull_pl),
-            module: &cull_module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let cull_entry = |label: &str, entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&cull_pl),
+                module: &cull_module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let cull_pipeline = cull_entry("ShadowMap::cull_pipeline", "main");
+        let sun_pipeline = cull_entry("ShadowMap::sun_pipeline", "sun");
         let cull_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ShadowMap::cull_uniforms"),
             size: std::mem::size_of::<ShadowCullUniforms>() as u64,
@@ -193,6 +208,7 @@ impl ShadowMap {
             faces,
             cull_layout,
             cull_pipeline,
+            sun_pipeline,
             cull_uniforms,
             face_lists: None,
         })
@@ -203,11 +219,12 @@ impl ShadowMap {
         self.face_lists.is_some()
     }
 
-    /// Makes the face lists for `geometry` unless they were made for it. Without room for them
-    /// in one storage binding the faces draw every triangle.
-    pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu) {
+    /// Makes the face lists for `geometry` unless they were made for it and `pyramid` (the sun's,
+    /// [`super::ShadowPyramid`]). Without room for them in one storage binding the faces draw
+    /// every triangle.
+    pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu, pyramid: &wgpu::Buffer) {
         let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
-        if self.face_lists.as_ref().is_some_and(|fl| fl.source == geometry.indices) {
+        if self.face_lists.as_ref().is_some_and(|fl| fl.source == geometry.indices && fl.pyramid == *pyramid) {
             return;
         }
         let index_bytes = geometry.index_count as u64 * 4;
@@ -242,10 +259,12 @@ impl ShadowMap {
             args: args.as_entire_binding(),
             triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
             sides: geometry.light_sides.as_entire_binding(),
+            pyramid: pyramid.as_entire_binding(),
         }
         .bind(device, "ShadowMap::cull_bind_group", &self.cull_layout);
         self.face_lists = Some(FaceLists {
             source: geometry.indices.clone(),
+            pyramid: pyramid.clone(),
             lists,
             args,
             args_init,
@@ -382,16 +401,23 @@ impl ShadowMap {
         let face_culling = culling.faces;
         let (faces, _, count) = self.uniforms(scene);
         let culled = match (&self.face_lists, scene.light) {
-            (Some(fl), Light::Point { position, .. }) if face_culling && count == 6 => {
-                let u =
-                    ShadowCullUniforms { light: position.extend(1.0), counts: [fl.triangles, fl.index_count, 0, 0] };
+            (Some(fl), light) if face_culling && count == if light.is_point() { 6 } else { 1 } => {
+                let (light, pipeline) = match light {
+                    Light::Point { position, .. } => (position.extend(1.0), &self.cull_pipeline),
+                    Light::Directional { direction, .. } => (direction.extend(0.0), &self.sun_pipeline),
+                };
+                let u = ShadowCullUniforms {
+                    light,
+                    counts: [fl.triangles, fl.index_count, culling.hidden, self.size],
+                    view_proj: faces[0].view_proj,
+                };
                 queue.write_buffer(&self.cull_uniforms, 0, bytemuck::bytes_of(&u));
                 encoder.copy_buffer_to_buffer(&fl.args_init, 0, &fl.args, 0, fl.args_init.size());
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("ShadowMap::cull_pass"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.cull_pipeline);
+                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &fl.bind_group, &[]);
                 // 64 triangles a workgroup, spread over y past the 65 535 limit on x.
                 let groups = fl.triangles.div_ceil(64).max(1);

@@ -1,0 +1,63 @@
+// hidden.wgsl: whether the directional shadow map shows a triangle behind nearer surfaces all
+// around it, from the pyramid of its block maxima (shadow_pyramid.wgsl). Imported by Cull (which
+// then does not voxelize the triangle) and by the shadow map's sun list (shadow_cull.wgsl, which
+// then does not draw it: it could not win the depth test at any texel centre it covers).
+//
+// The importing file declares `pyramid: array<f32>` (levels PYRAMID_FIRST_LEVEL to the coarsest,
+// one after the other).
+
+// The shadow pyramid's finest level (ShadowPyramid::FIRST_LEVEL): blocks of 4x4 texels.
+const PYRAMID_FIRST_LEVEL: u32 = 2u;
+
+// Whether the directional shadow map shows the triangle behind nearer surfaces all around it:
+// its nearest depth (an orthographic depth is linear, so a vertex's) lies beyond the farthest
+// depth over the map's texels within one texel of its footprint, read as at most 3x3 texels of the
+// first pyramid level whose blocks are that coarse. Every light ray through the triangle then
+// meets a nearer surface first (at a smaller gamma: after the scan the triangle's bits would change
+// nothing), up to an occluder's gap narrower than a texel between texel centres, which the map
+// cannot see (docs/pruning.md); and at every texel centre it covers, the map holds a nearer depth
+// (drawn again, it would not change the map). Triangles reaching past the map's edge, or wider
+// than the coarsest level's blocks, are kept. `m`: the map's view-projection, `n` its texels per
+// side, `coarsest` the pyramid's coarsest level (0: no pyramid, nothing is hidden).
+fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
+    if (coarsest == 0u) { return false; }
+    let c0 = (m * vec4f(p0, 1.0)).xyz;
+    let c1 = (m * vec4f(p1, 1.0)).xyz;
+    let c2 = (m * vec4f(p2, 1.0)).xyz;
+    // Texel coordinates, as shadow_lookup.wgsl's: texel i spans [i, i + 1).
+    let t0 = vec2f(c0.x * 0.5 + 0.5, 0.5 - c0.y * 0.5) * n;
+    let t1 = vec2f(c1.x * 0.5 + 0.5, 0.5 - c1.y * 0.5) * n;
+    let t2 = vec2f(c2.x * 0.5 + 0.5, 0.5 - c2.y * 0.5) * n;
+    // The texels the footprint touches and a ring of one around them.
+    let lo = floor(min(t0, min(t1, t2))) - 1.0;
+    let hi = floor(max(t0, max(t1, t2))) + 1.0;
+    if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
+    let a = vec2u(lo);
+    let b = vec2u(hi);
+    // The first level whose blocks hold the range in three per side, and where it starts.
+    var level = PYRAMID_FIRST_LEVEL;
+    var offset = 0u;
+    let size = u32(n);
+    loop {
+        if (all((b >> vec2u(level)) - (a >> vec2u(level)) <= vec2u(2u))) { break; }
+        if (level >= coarsest) { return false; }
+        let side = (size + (1u << level) - 1u) >> level;
+        offset += side * side;
+        level++;
+    }
+    let side = (size + (1u << level) - 1u) >> level;
+    let i = a >> vec2u(level);
+    let j = b >> vec2u(level);
+    let mid = min(i + 1u, j);
+    // Rows i, mid and j (the same row twice where the range holds fewer).
+    let r0 = offset + i.y * side;
+    let r1 = offset + mid.y * side;
+    let r2 = offset + j.y * side;
+    let far = max(
+        max(max(pyramid[r0 + i.x], pyramid[r0 + mid.x]), max(pyramid[r0 + j.x], pyramid[r1 + i.x])),
+        max(max(pyramid[r1 + mid.x], pyramid[r1 + j.x]), max(max(pyramid[r2 + i.x], pyramid[r2 + mid.x]), pyramid[r2 + j.x])),
+    );
+    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
+    // texel centre may round below its vertices' minimum.
+    return far < min(c0.z, min(c1.z, c2.z)) - 4e-6;
+}
