@@ -14,6 +14,9 @@
 //! (`draw_indexed_indirect`). Without it every face draws every triangle: six times the vertex
 //! work, which on llvmpipe is single-threaded and was the largest cost of big scenes under a
 //! point light. Skipped (every face draws all) when the lists would not fit a storage binding.
+//! The sun's map draws a list the same way (`sun` in shadow_cull.wgsl): the solids' faces toward
+//! the light, less the triangles an earlier frame's pyramid of the same map shows hidden, which
+//! could not win its depth test ([`super::ShadowPyramid`]; the same map, bit for bit).
 
 use super::scene_gpu::{Facing, SceneGpu};
 use super::util::{bindings, cull_mode, scene_vertex_layout, texture_2d, toward_is_ccw, Kind};
