@@ -41,7 +41,7 @@ pub use scene_gpu::SceneGpu;
 pub use shadow_map::{
     FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowCulling, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
-pub use shadow_pyramid::{ShadowPyramid, ShadowPyramidBindings};
+pub use shadow_pyramid::{MapInputs, ShadowPyramid, ShadowPyramidBindings};
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
@@ -242,10 +242,8 @@ pub struct Renderer {
     /// change runs without it and reduces its own map at its end.
     pub occlusion_culling: bool,
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
-    /// for the frames after it ([`ShadowPyramid::key`]; set by `prepare`).
-    pyramid_to_build: Option<Vec<u8>>,
-    /// This frame's coarsest pyramid level the hidden-triangle tests read (0: none; `prepare`).
-    hidden_levels: u32,
+    /// for the frames after it (set by `prepare`).
+    pyramid_to_build: Option<MapInputs>,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -293,7 +291,6 @@ impl Renderer {
             back_face_culling: true,
             occlusion_culling: true,
             pyramid_to_build: None,
-            hidden_levels: 0,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -593,14 +590,13 @@ impl Renderer {
         // (every method's) leave the hidden triangles out.
         let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
         let key = match (&self.geometry, occlusion) {
-            (Some(g), true) => Some(ShadowPyramid::key(g.fingerprint, &shadow_lookup, self.back_face_culling)),
+            (Some(g), true) => Some(MapInputs::new(g.fingerprint, &shadow_lookup, self.back_face_culling)),
             _ => None,
         };
         let pyramid = &self.passes.shadow_pyramid;
         let ready = key.is_some() && pyramid.built_from == key;
         let levels = if ready { pyramid.bound_coarsest() } else { 0 };
         self.pyramid_to_build = if ready { None } else { key };
-        self.hidden_levels = levels;
         let v = &self.passes.voxelize;
         setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
@@ -642,11 +638,8 @@ impl Renderer {
         let ahead = 2.0 * near.max(1e-4);
         let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
         // The frame: an ordered list of passes.
-        let culling = ShadowCulling {
-            faces: self.shadow_face_culling,
-            hidden: self.hidden_levels,
-            light_facing: g.light_facing(),
-        };
+        let culling =
+            ShadowCulling { faces: self.shadow_face_culling, hidden: u.work.z, light_facing: g.light_facing() };
         p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
         f.mark(Pass::ShadowMap);
         let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };

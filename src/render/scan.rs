@@ -23,8 +23,9 @@ pub struct Scan {
 impl Scan {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Scan, GpuError> {
         let layout = ScanBindings::layout(device, "Scan::layout", wgpu::ShaderStages::COMPUTE);
-        let quads = compute_pipeline(device, "Scan::pipeline", &lib.module(device, "scan.wgsl")?, &layout);
-        let words = compute_pipeline(device, "Scan::pipeline_words", &lib.module(device, "scan_words.wgsl")?, &layout);
+        let quads = compute_pipeline(device, "Scan::pipeline", &lib.module(device, "scan.wgsl")?, "main", &layout);
+        let words =
+            compute_pipeline(device, "Scan::pipeline_words", &lib.module(device, "scan_words.wgsl")?, "main", &layout);
         Ok(Scan { quads, words, layout, bind_group: None })
     }
 

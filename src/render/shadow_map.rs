@@ -19,7 +19,7 @@
 //! could not win its depth test ([`super::ShadowPyramid`]; the same map, bit for bit).
 
 use super::scene_gpu::{Facing, SceneGpu};
-use super::util::{bindings, cull_mode, scene_vertex_layout, texture_2d, toward_is_ccw, Kind};
+use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, texture_2d, toward_is_ccw, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use crate::params::Light;
@@ -178,23 +178,8 @@ impl ShadowMap {
             .collect();
         let cull_module = lib.module(device, "shadow_cull.wgsl")?;
         let cull_layout = ShadowCullBindings::layout(device, "ShadowMap::cull_layout", wgpu::ShaderStages::COMPUTE);
-        let cull_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ShadowMap::cull_pipeline_layout"),
-            bind_group_layouts: &[Some(&cull_layout)],
-            immediate_size: 0,
-        });
-        let cull_entry = |label: &str, entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(&cull_pl),
-                module: &cull_module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let cull_pipeline = cull_entry("ShadowMap::cull_pipeline", "main");
-        let sun_pipeline = cull_entry("ShadowMap::sun_pipeline", "sun");
+        let cull_pipeline = compute_pipeline(device, "ShadowMap::cull_pipeline", &cull_module, "main", &cull_layout);
+        let sun_pipeline = compute_pipeline(device, "ShadowMap::sun_pipeline", &cull_module, "sun", &cull_layout);
         let cull_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ShadowMap::cull_uniforms"),
             size: std::mem::size_of::<ShadowCullUniforms>() as u64,

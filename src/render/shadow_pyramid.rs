@@ -11,7 +11,7 @@
 //! between texel centres (docs/pruning.md).
 //!
 //! The pyramid is made at the end of a frame, for the frames after it: a later frame whose map has
-//! the same inputs ([`ShadowPyramid::key`]: the geometry, the light's matrices, the size) draws the
+//! the same inputs ([`MapInputs`]: the geometry, the light's matrices, the size) draws the
 //! same map, so its Cull reads this one, and the frame never waits for its own map's
 //! rasterization (on llvmpipe, which draws it on its raster threads beside Cull and Voxelize, that
 //! wait cost what the culling saved: docs/results.md, session 17). The frame after the light or the
@@ -20,7 +20,7 @@
 //! Directional lights only: the cube map of a point light is not reduced (its Cull keeps every
 //! triangle the other tests keep).
 
-use super::util::{bindings, Kind};
+use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
 use bytemuck::{Pod, Zeroable};
 
@@ -54,9 +54,25 @@ pub struct ShadowPyramid {
     pub pyramid: Option<wgpu::Buffer>,
     /// The map size the pyramid and its bind groups were made for, and one bind group per level.
     bound: Option<(u32, Vec<(wgpu::BindGroup, u32)>)>,
-    /// What the map the pyramid holds was drawn from ([`ShadowPyramid::key`]), once built: a later
-    /// frame whose map has the same inputs draws the same map, and Cull reads the pyramid as it is.
-    pub built_from: Option<Vec<u8>>,
+    /// What the map the pyramid holds was drawn from, once built: a later frame whose map has the
+    /// same inputs draws the same map, and Cull reads the pyramid as it is.
+    pub built_from: Option<MapInputs>,
+}
+
+/// The inputs of a directional shadow map, compared bit for bit: the scene's geometry (its
+/// fingerprint), the map's matrices and parameters (the light's direction, the casters'
+/// rectangle, the size) and whether solids draw one side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MapInputs {
+    geometry: u64,
+    shadow: [u8; std::mem::size_of::<super::ShadowUniforms>()],
+    one_sided: bool,
+}
+
+impl MapInputs {
+    pub fn new(geometry: u64, shadow: &super::ShadowUniforms, one_sided: bool) -> MapInputs {
+        MapInputs { geometry, shadow: bytemuck::cast(*shadow), one_sided }
+    }
 }
 
 impl ShadowPyramid {
@@ -71,39 +87,14 @@ impl ShadowPyramid {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<ShadowPyramid, GpuError> {
         let module = lib.module(device, "shadow_pyramid.wgsl")?;
         let layout = ShadowPyramidBindings::layout(device, "ShadowPyramid::layout", wgpu::ShaderStages::COMPUTE);
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ShadowPyramid::pipeline_layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(&format!("ShadowPyramid::{entry}")),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
         Ok(ShadowPyramid {
-            from_map: pipeline("from_map"),
-            from_level: pipeline("from_level"),
+            from_map: compute_pipeline(device, "ShadowPyramid::from_map", &module, "from_map", &layout),
+            from_level: compute_pipeline(device, "ShadowPyramid::from_level", &module, "from_level", &layout),
             layout,
             pyramid: None,
             bound: None,
             built_from: None,
         })
-    }
-
-    /// The inputs of a directional shadow map, as bytes to compare: the scene's geometry (its
-    /// fingerprint), the map's matrices and parameters (the light's direction, the casters'
-    /// rectangle, the size) and whether solids draw one side.
-    pub fn key(geometry: u64, shadow: &super::ShadowUniforms, one_sided: bool) -> Vec<u8> {
-        let mut k = geometry.to_le_bytes().to_vec();
-        k.extend_from_slice(bytemuck::bytes_of(shadow));
-        k.push(one_sided as u8);
-        k
     }
 
     /// The coarsest level a map of `size` texels per side gets (a level has at least one texel);
@@ -133,8 +124,12 @@ impl ShadowPyramid {
         out
     }
 
-    /// (Re)binds the shadow map; the pyramid is remade when the map's size changed.
+    /// Binds the shadow map; the pyramid and its bind groups are remade when the map's size
+    /// changed (a map of the same size is the same texture: a new one comes with new passes).
     pub fn bind(&mut self, device: &wgpu::Device, map_view: &wgpu::TextureView, size: u32) {
+        if self.bound.as_ref().is_some_and(|(s, _)| *s == size) {
+            return;
+        }
         let params = Self::level_params(size);
         let floats = params.last().map_or(1, |l| l.dst_offset + l.dst_size * l.dst_size);
         if self.pyramid.as_ref().is_none_or(|b| b.size() != floats as u64 * 4) {

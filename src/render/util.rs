@@ -158,12 +158,14 @@ pub fn options<'a>(constants: &'a [(&'a str, f64)]) -> wgpu::PipelineCompilation
     wgpu::PipelineCompilationOptions { constants, ..Default::default() }
 }
 
-/// An unspecialised compute pipeline with one bind group and entry point `main` (the passes whose
-/// shaders read neither the light type nor the phase; the others use `variant::SpecialisedCompute`).
+/// An unspecialised compute pipeline with one bind group, of `module`'s entry point `entry` (the
+/// passes whose shaders read neither the light type nor the phase; the others use
+/// `variant::SpecialisedCompute`).
 pub fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     module: &wgpu::ShaderModule,
+    entry: &str,
     layout: &wgpu::BindGroupLayout,
 ) -> wgpu::ComputePipeline {
     let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -175,7 +177,7 @@ pub fn compute_pipeline(
         label: Some(label),
         layout: Some(&pl),
         module,
-        entry_point: Some("main"),
+        entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
     })
