@@ -311,6 +311,17 @@ pub struct Row {
     pub hdr: ErrorStats,
 }
 
+/// What a medium edit costs against a whole frame at one point, in wall-clock milliseconds (the
+/// medians of `render_frame` followed by a wait for the GPU: what the editor waits for, without the
+/// images' read-back). In an edit frame only the medium's density changes, so the renderer takes
+/// the shadow map, the surfaces and the volume from the frame before ([`Renderer::reuse_unchanged`]).
+#[derive(Debug, Clone)]
+pub struct EditRow {
+    pub point: Point,
+    pub whole_ms: f64,
+    pub edit_ms: f64,
+}
+
 /// One point of a scaling sweep.
 #[derive(Debug, Clone)]
 pub struct ScalingRow {
@@ -341,6 +352,9 @@ pub struct BenchResults {
     pub rows: Vec<Row>,
     pub triangle_rows: Vec<ScalingRow>,
     pub resolution_rows: Vec<ScalingRow>,
+    /// A medium edit against a whole frame: VSV at the default grid and the baseline point its
+    /// ratio is taken against.
+    pub edit_rows: Vec<EditRow>,
     /// What was skipped and why.
     pub notes: Vec<String>,
     /// The files written.
@@ -425,6 +439,42 @@ fn measure_frames(
     }
     let Some(last) = last else { unreachable!("frames >= 1") };
     Ok((timed, last))
+}
+
+/// Times `frames` whole frames of `point`, then `frames` frames that each change only the medium's
+/// density (by 1%, back and forth), reusing what the edit leaves alone.
+fn measure_edits(
+    r: &mut Renderer,
+    scene: &mut Scene,
+    width: u32,
+    height: u32,
+    point: &Point,
+    frames: usize,
+) -> Result<EditRow, RenderError> {
+    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
+    scene.grid = point.grid;
+    let density = scene.medium.density;
+    let time = |r: &mut Renderer, scene: &mut Scene, reuse: bool| -> Result<f64, RenderError> {
+        r.reuse_unchanged = reuse;
+        // The warm-up frame, and the frame the first edit reuses.
+        r.render_frame(scene, width, height, point.method)?;
+        let mut wall = Vec::with_capacity(frames);
+        for k in 0..frames.max(1) {
+            if reuse {
+                scene.medium.density = density * (1.0 + 0.01 * (k % 2) as f32);
+            }
+            let started = Instant::now();
+            r.render_frame(scene, width, height, point.method)?;
+            r.ctx.wait()?;
+            wall.push(started.elapsed().as_secs_f64() * 1e3);
+        }
+        Ok(median(wall))
+    };
+    let times = time(r, scene, false).and_then(|whole| Ok((whole, time(r, scene, true)?)));
+    r.reuse_unchanged = false;
+    scene.medium.density = density;
+    let (whole_ms, edit_ms) = times?;
+    Ok(EditRow { point: *point, whole_ms, edit_ms })
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -583,6 +633,15 @@ fn style(len: u64, progress: bool) -> ProgressBar {
 
 /// Runs the whole benchmark of `scene` on `renderer` and writes the files into `opts.out_dir`.
 pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Result<BenchResults, BenchError> {
+    // Every timed frame runs every pass: the sweep repeats identical frames, which would otherwise
+    // take the shadow map, the surfaces and the volume from the frame before and time the rest.
+    let reuse = std::mem::replace(&mut renderer.reuse_unchanged, false);
+    let results = run_sweeps(renderer, scene, opts);
+    renderer.reuse_unchanged = reuse;
+    results
+}
+
+fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Result<BenchResults, BenchError> {
     let started = Instant::now();
     let (w, h) = (opts.width, opts.height);
     let out = &opts.out_dir;
@@ -699,6 +758,27 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         return Err(BenchError::NothingRendered(first_failure.unwrap_or_else(|| "the sweep is empty".into())));
     }
 
+    // What the editor waits for when an artist tunes the medium: VSV at the default grid and the
+    // baseline point its ratio is taken against.
+    let mut edit_rows = Vec::new();
+    let vsv = rows.iter().find(|r| r.point.method == Method::Vsv && r.point.grid == Grid::default());
+    let march = vsv.and_then(|v| {
+        let setting = baseline_ratio(&rows, v).baseline?.0;
+        rows.iter().find(|r| r.point.method_name() == "raymarch" && r.point.setting() == setting)
+    });
+    let edit_points: Vec<Point> = vsv.into_iter().chain(march).map(|r| r.point).collect();
+    bar.inc_length(edit_points.len() as u64);
+    for p in &edit_points {
+        bar.set_message(format!("a medium edit: {} {}", p.method_name(), p.setting()));
+        match measure_edits(renderer, &mut work, w, h, p, opts.frames.min(5)) {
+            Ok(row) => edit_rows.push(row),
+            Err(e) => {
+                notes.push(format!("a medium edit, {} {}: skipped, it failed: {e}", p.method_name(), p.setting()))
+            }
+        }
+        bar.inc(1);
+    }
+
     let mut scale = |scene: &mut Scene,
                      tri: usize,
                      size: (u32, u32),
@@ -766,6 +846,7 @@ pub fn run(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Resul
         rows,
         triangle_rows,
         resolution_rows,
+        edit_rows,
         notes,
         files: Vec::new(),
         seconds: 0.0,

@@ -416,6 +416,30 @@ pub fn markdown(r: &BenchResults) -> String {
         }
     }
 
+    // What the editor waits for while an artist tunes the medium.
+    if !r.edit_rows.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n### A medium edit\n\nWall-clock medians of a frame (submitted and waited for, without reading the \
+             images back) at VSV's default grid and at the baseline point its ratio is taken against: a whole \
+             frame, and a frame in which only the medium's density changed, which takes the shadow map, the \
+             surfaces and the shadow volume from the frame before (`Renderer::reuse_unchanged`; the sweeps \
+             above time whole frames).\n"
+        );
+        let _ = writeln!(s, "| method | setting | whole frame ms | medium edit ms |");
+        let _ = writeln!(s, "|---|---|---:|---:|");
+        for e in &r.edit_rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} |",
+                e.point.method_name(),
+                e.point.setting(),
+                ms(e.whole_ms),
+                ms(e.edit_ms)
+            );
+        }
+    }
+
     // Equal error: for each VSV front point, the baseline's time at the same error.
     let ms_of = methods(&r.rows);
     if ms_of.contains(&"raymarch") {

@@ -114,6 +114,15 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             row.scatter.rel_rmse * 100.0
         );
     }
+    for e in &r.edit_rows {
+        println!(
+            "a medium edit, {} {}: {:.1} ms against {:.1} ms for a whole frame (wall clock)",
+            e.point.method_name(),
+            e.point.setting(),
+            e.edit_ms,
+            e.whole_ms
+        );
+    }
     for n in &r.notes {
         println!("note: {n}");
     }

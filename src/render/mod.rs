@@ -9,7 +9,10 @@
 //!
 //! Resources (targets, grid, geometry, shadow map) are created when their inputs change, and every
 //! pass's bind groups with them ([`Renderer::rebind`]): a frame of an unchanged scene, size and
-//! grid creates nothing.
+//! grid creates nothing. A frame whose only changes are the medium's coefficients, its phase
+//! function's asymmetry or the light's power (an artist tuning the medium) runs no pass before
+//! Integrate (or Raymarch) at all: the shadow map, the surfaces and the shadow volume are the
+//! previous frame's, bit for bit ([`Renderer::reuse_unchanged`]).
 
 mod composite;
 mod cull;
@@ -75,6 +78,8 @@ pub struct RenderOutput {
     pub setup: FrameSetup,
     /// The passes that ran, in order.
     pub passes: Vec<Pass>,
+    /// The passes whose results came from the previous frame ([`FrameInfo::reused`]).
+    pub reused: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
 }
@@ -86,6 +91,9 @@ pub struct FrameInfo {
     pub setup: FrameSetup,
     /// The passes that ran, in order (also without timestamps).
     pub passes: Vec<Pass>,
+    /// The passes whose results this frame took from the previous one instead of running them
+    /// (nothing they read had changed: [`Renderer::reuse_unchanged`]); empty for a whole frame.
+    pub reused: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
 }
@@ -109,6 +117,8 @@ pub struct PruneReport {
     pub triangles: CullCounts,
     /// The passes that ran.
     pub passes: Vec<Pass>,
+    /// The passes whose results the frame took from the previous one ([`FrameInfo::reused`]).
+    pub reused: Vec<Pass>,
     /// The shader variant they ran as (`point light, henyey-greenstein`): the light type and phase
     /// function are compiled into the pipelines rather than branched on per pixel.
     pub variant: String,
@@ -121,12 +131,53 @@ impl RenderOutput {
             timings: self.timings.clone(),
             setup: self.setup,
             passes: self.passes.clone(),
+            reused: self.reused.clone(),
             variant: self.variant,
         }
     }
 
     pub fn total_ms(&self) -> f64 {
         self.timings.iter().map(|t| t.ms).sum()
+    }
+}
+
+/// Everything the passes before Integrate (or Raymarch) read: the shadow map, the surfaces, Ranges,
+/// Cull, Voxelize and Scan. Two frames with the same inputs make the same map, surfaces and shadow
+/// volume, bit for bit, so the second takes them from the first.
+///
+/// The frame's uniforms are compared whole but for the fields only Integrate, the scatter table,
+/// Raymarch and Composite read (the medium's coefficients, the phase function's asymmetry, the
+/// light's power and softening radius: `tests/reuse.rs` changes each and checks the image against
+/// a fresh renderer's); anything else the earlier passes depend on is in the uniforms, the shadow
+/// map's uniforms or the fields below, and a change of resources or pipelines (a new size, grid,
+/// shadow map, shader reload or variant) forgets the key altogether.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct FrameKey {
+    uniforms: [u8; std::mem::size_of::<FrameUniforms>()],
+    shadow: [u8; std::mem::size_of::<ShadowUniforms>()],
+    geometry: u64,
+    method: Method,
+    /// Whether the medium scatters at all: without it no voxel pass runs.
+    scatters: bool,
+    /// prune, shadow_face_culling, back_face_culling, occlusion_culling, keep_geometry.
+    switches: [bool; 5],
+}
+
+impl FrameKey {
+    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup, shadow: &ShadowUniforms, geometry: u64) -> FrameKey {
+        let mut u = setup.uniforms;
+        // What only the passes from Integrate on read (common.wgsl's Frame).
+        u.light_power = glam::Vec4::ZERO;
+        u.sigma_s = glam::Vec4::ZERO;
+        u.sigma_t = glam::Vec4::ZERO;
+        FrameKey {
+            uniforms: bytemuck::cast(u),
+            shadow: bytemuck::cast(*shadow),
+            geometry,
+            method: setup.method,
+            scatters: scene.needs_scattering(),
+            switches: [r.prune, r.shadow_face_culling, r.back_face_culling, r.occlusion_culling, r.keep_geometry],
+        }
     }
 }
 
@@ -244,6 +295,17 @@ pub struct Renderer {
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
+    /// Take the shadow map, the surfaces and the shadow volume from the previous frame when
+    /// nothing they depend on changed (`FrameKey`): a frame that only changes the medium's
+    /// coefficients, its phase asymmetry or the light's power runs Integrate (or Raymarch) and
+    /// Composite alone. On by default; `epivox bench` turns it off to time whole frames.
+    pub reuse_unchanged: bool,
+    /// The inputs of the last frame that ran the passes before Integrate (or Raymarch) and
+    /// completed, and which of them it ran; `None` after anything that may change their results
+    /// without showing in the key: new resources or pipelines (whatever marks the bind groups
+    /// stale: a new size, grid, geometry or shadow map, a shader reload), a new variant, a failed
+    /// frame.
+    drawn: Option<(FrameKey, Vec<Pass>)>,
     /// The library the passes were built from, kept to rebuild the shadow map at a new size.
     lib: ShaderLibrary,
     frame_buffer: wgpu::Buffer,
@@ -291,6 +353,8 @@ impl Renderer {
             back_face_culling: true,
             occlusion_culling: true,
             pyramid_to_build: None,
+            reuse_unchanged: true,
+            drawn: None,
             lib: lib.clone(),
             frame_buffer,
             shadow_uniforms,
@@ -373,7 +437,8 @@ impl Renderer {
         let m = &info.setup.mapping;
         let point = info.setup.frame.is_point() && info.setup.method != Method::Cartesian;
         let z = |v: f64| if point { v.to_degrees() } else { v };
-        let voxels_ran = info.passes.contains(&Pass::Voxelize);
+        // A frame that reused the last frame's shadow volume reports the Cull pass that made it.
+        let voxels_ran = info.passes.contains(&Pass::Voxelize) || info.reused.contains(&Pass::Voxelize);
         let fitted = if voxels_ran { self.pruned_z_range()? } else { None };
         let bins = fitted.map(|(lo, hi)| [z(lo as f64), z(hi as f64)]).unwrap_or([z(m.z_lo), z(m.z_hi)]);
         Ok(PruneReport {
@@ -386,6 +451,7 @@ impl Renderer {
             triangles_total: self.geometry.as_ref().map_or(0, |g| g.gpu.triangle_count),
             triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
             passes: info.passes.clone(),
+            reused: info.reused.clone(),
             variant: info.variant.to_string(),
         })
     }
@@ -550,15 +616,15 @@ impl Renderer {
     }
 
     /// Everything a frame needs before its passes are recorded: resources, pipelines of the variant,
-    /// bind groups and this frame's uniforms. Returns the frame's setup and the variant its passes
-    /// run as.
+    /// bind groups and this frame's uniforms. Returns the frame's setup, the variant its passes
+    /// run as and what the passes before Integrate read (`FrameKey`).
     fn prepare(
         &mut self,
         scene: &Scene,
         width: u32,
         height: u32,
         method: Method,
-    ) -> Result<(FrameSetup, Variant), RenderError> {
+    ) -> Result<(FrameSetup, Variant, FrameKey), RenderError> {
         self.ensure_geometry(scene)?;
         self.ensure_targets(width, height)?;
         self.ensure_grid(scene.grid)?;
@@ -577,8 +643,11 @@ impl Renderer {
         if self.variant != Some(variant) {
             self.passes.prepare(&self.ctx, variant)?;
             self.variant = Some(variant);
+            self.drawn = None;
         }
         if self.stale_bindings {
+            // New resources: nothing drawn into the old ones carries over.
+            self.drawn = None;
             let ctx = self.ctx.clone();
             ctx.scoped("binding the passes", || self.rebind())?;
         }
@@ -601,7 +670,9 @@ impl Renderer {
         setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
-        Ok((setup, variant))
+        let fingerprint = self.geometry.as_ref().map_or(0, |g| g.fingerprint);
+        let key = FrameKey::new(self, scene, &setup, &shadow_lookup, fingerprint);
+        Ok((setup, variant, key))
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets
@@ -614,7 +685,14 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
-        let (setup, v) = self.prepare(scene, width, height, method)?;
+        let (setup, v, key) = self.prepare(scene, width, height, method)?;
+        // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
+        // results are still in the targets, the shadow map and the grid.
+        let reused = match self.drawn.take() {
+            Some((drawn, ran)) if self.reuse_unchanged && drawn == key => ran,
+            _ => Vec::new(),
+        };
+        let reuse = !reused.is_empty();
         if let Some(g) = self.geometry.as_mut() {
             g.gpu.update_light_facing(&self.ctx.queue, &scene.light, self.back_face_culling);
         }
@@ -629,22 +707,24 @@ impl Renderer {
         if let Some(t) = f.timer.as_deref_mut() {
             t.begin(&mut f.enc);
         }
-        // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
         let g = &geometry.gpu;
         let u = &setup.uniforms;
-        let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
-        let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
-        let eye_runs = g.draw_runs(&g.eye_facing(eye, near_corner, self.back_face_culling));
-        let ahead = 2.0 * near.max(1e-4);
-        let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
         // The frame: an ordered list of passes.
-        let culling =
-            ShadowCulling { faces: self.shadow_face_culling, hidden: u.work.z, light_facing: g.light_facing() };
-        p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
-        f.mark(Pass::ShadowMap);
-        let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
-        p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
-        f.mark(Pass::Surface);
+        if !reuse {
+            // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
+            let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
+            let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
+            let eye_runs = g.draw_runs(&g.eye_facing(eye, near_corner, self.back_face_culling));
+            let ahead = 2.0 * near.max(1e-4);
+            let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
+            let culling =
+                ShadowCulling { faces: self.shadow_face_culling, hidden: u.work.z, light_facing: g.light_facing() };
+            p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
+            f.mark(Pass::ShadowMap);
+            let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
+            p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
+            f.mark(Pass::Surface);
+        }
         match method {
             Method::Raymarch { steps, jitter } => {
                 p.raymarch.record(queue, &mut f.enc, v, size, steps, jitter);
@@ -656,24 +736,31 @@ impl Renderer {
                 f.mark(Pass::Integrate);
             }
             _ => {
-                if self.prune {
-                    p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
-                    f.mark(Pass::Ranges);
+                if reuse {
+                    // The uniforms were written anew: the bins' range is the one the grid was made with.
+                    if self.prune {
+                        p.ranges.copy_range(&mut f.enc, &self.frame_buffer);
+                    }
+                } else {
+                    if self.prune {
+                        p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
+                        f.mark(Pass::Ranges);
+                    }
+                    f.enc.clear_buffer(bits, 0, None);
+                    p.cull.begin_frame(&mut f.enc);
+                    // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
+                    for chunk in 0..p.cull.chunks() {
+                        p.cull.record(&mut f.enc, v, chunk, p.voxelize.items_per_thread);
+                        f.mark(Pass::Cull);
+                        p.voxelize.record(&mut f.enc, v, chunk, &p.cull.dispatch);
+                        f.mark(Pass::Voxelize);
+                    }
+                    if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
+                        f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
+                    }
+                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays);
+                    f.mark(Pass::Scan);
                 }
-                f.enc.clear_buffer(bits, 0, None);
-                p.cull.begin_frame(&mut f.enc);
-                // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
-                for chunk in 0..p.cull.chunks() {
-                    p.cull.record(&mut f.enc, v, chunk, p.voxelize.items_per_thread);
-                    f.mark(Pass::Cull);
-                    p.voxelize.record(&mut f.enc, v, chunk, &p.cull.dispatch);
-                    f.mark(Pass::Voxelize);
-                }
-                if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
-                    f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
-                }
-                p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays);
-                f.mark(Pass::Scan);
                 if setup.frame.is_point() && method == Method::Vsv {
                     p.scatter_table.record(&mut f.enc, v);
                     f.mark(Pass::ScatterTable);
@@ -690,16 +777,30 @@ impl Renderer {
             p.shadow_pyramid.record(&mut f.enc);
             f.mark(Pass::ShadowPyramid);
         }
-        let done = self.finish(f, setup, v);
+        let done = self.finish(f, setup, v, reused);
         self.timer = timer;
-        if done.is_ok() && build.is_some() {
-            self.passes.shadow_pyramid.built_from = build;
+        if let Ok(info) = &done {
+            if build.is_some() {
+                self.passes.shadow_pyramid.built_from = build;
+            }
+            let drawn = if reuse {
+                info.reused.clone()
+            } else {
+                info.passes.iter().copied().filter(|p| Pass::BEFORE_VOLUME.contains(p)).collect()
+            };
+            self.drawn = Some((key, drawn));
         }
         done
     }
 
     /// Submits the frame and reads its timestamps back.
-    fn finish(&self, f: FrameRecorder, setup: FrameSetup, variant: Variant) -> Result<FrameInfo, RenderError> {
+    fn finish(
+        &self,
+        f: FrameRecorder,
+        setup: FrameSetup,
+        variant: Variant,
+        reused: Vec<Pass>,
+    ) -> Result<FrameInfo, RenderError> {
         let FrameRecorder { mut enc, timer, ran } = f;
         if let Some(t) = timer.as_deref() {
             t.resolve(&mut enc);
@@ -716,7 +817,7 @@ impl Renderer {
         }
         let mut passes = ran;
         passes.dedup();
-        Ok(FrameInfo { timings, setup, passes, variant })
+        Ok(FrameInfo { timings, setup, passes, reused, variant })
     }
 
     /// Renders one frame and reads the final and the scattered image back to the CPU.
@@ -727,7 +828,7 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<RenderOutput, RenderError> {
-        let FrameInfo { timings, setup, passes, variant } = self.render_frame(scene, width, height, method)?;
+        let FrameInfo { timings, setup, passes, reused, variant } = self.render_frame(scene, width, height, method)?;
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
             let mut img = Image::new(width, height);
@@ -738,7 +839,7 @@ impl Renderer {
         };
         let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
         let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
-        Ok(RenderOutput { hdr, scatter, timings, setup, passes, variant })
+        Ok(RenderOutput { hdr, scatter, timings, setup, passes, reused, variant })
     }
 
     /// Where the last frame's view rays end: the distance along each pixel's unit view ray to the

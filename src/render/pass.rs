@@ -33,6 +33,10 @@ pub enum Pass {
 }
 
 impl Pass {
+    /// The passes before the volume's integration (Integrate or Raymarch): a frame whose inputs to
+    /// them did not change takes their results from the last frame (`Renderer::reuse_unchanged`).
+    pub const BEFORE_VOLUME: [Pass; 6] =
+        [Pass::ShadowMap, Pass::Surface, Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan];
     /// Every pass, in frame order.
     pub const ALL: [Pass; 11] = [
         Pass::ShadowMap,

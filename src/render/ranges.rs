@@ -91,6 +91,12 @@ impl Ranges {
             pass.set_pipeline(finish);
             pass.dispatch_workgroups(1, 1, 1);
         }
+        self.copy_range(encoder, frame_uniforms);
+    }
+
+    /// Copies the last reduction's `[z_lo, z_hi]` into `frame_uniforms` (whose CPU copy holds the
+    /// unfitted range): also for a frame that reuses the shadow volume of the frame that ran it.
+    pub fn copy_range(&self, encoder: &mut wgpu::CommandEncoder, frame_uniforms: &wgpu::Buffer) {
         encoder.copy_buffer_to_buffer(&self.result, 4, frame_uniforms, Self::UNIFORM_OFFSET, 8);
     }
 }

@@ -54,7 +54,14 @@ pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
         format!("passes: {}", p.passes.iter().map(|p| p.label()).collect::<Vec<_>>().join(" › ")),
         format!("shaders specialised to: {}", p.variant),
     ];
-    if !p.passes.contains(&crate::render::Pass::Voxelize) {
+    if !p.reused.is_empty() {
+        v.push(format!(
+            "from the previous frame (only the medium or the light's power changed): {}",
+            p.reused.iter().map(|p| p.label()).collect::<Vec<_>>().join(" › ")
+        ));
+    }
+    let voxelize = crate::render::Pass::Voxelize;
+    if !p.passes.contains(&voxelize) && !p.reused.contains(&voxelize) {
         v.push("no grid this frame".into());
         return v;
     }

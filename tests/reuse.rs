@@ -1,0 +1,160 @@
+//! A frame whose only changes are the medium's coefficients, its phase function's asymmetry or the
+//! light's power takes the shadow map, the surfaces and the shadow volume from the frame before
+//! (`Renderer::reuse_unchanged`). It must come out the same, bit for bit, as the frame of a
+//! renderer that runs every pass, and every other change must run every pass again.
+
+mod common;
+
+use common::{occluder_scene, renderer};
+use epivox::gpu::ShaderLibrary;
+use epivox::params::{Light, Phase};
+use epivox::render::{Method, Pass, RenderOutput, Renderer};
+use epivox::scene::Scene;
+use glam::Vec3;
+
+const W: u32 = 96;
+const H: u32 = 72;
+
+fn render(r: &mut Renderer, scene: &Scene, method: Method) -> RenderOutput {
+    r.render(scene, W, H, method).unwrap_or_else(|e| panic!("{}: {e}", scene.name))
+}
+
+type MediumEdit = (&'static str, fn(&mut Scene) -> bool);
+
+/// The edits an artist tuning the medium makes: none changes what the passes before Integrate (or
+/// Raymarch) read, nor the shader variant (the medium stays coloured, the phase function HG).
+/// Each returns whether it applies to the scene.
+fn medium_edits() -> Vec<MediumEdit> {
+    vec![
+        ("scattering", |s| {
+            s.medium.scattering *= 1.5;
+            true
+        }),
+        ("absorption", |s| {
+            s.medium.absorption += Vec3::splat(0.02);
+            true
+        }),
+        ("density", |s| {
+            s.medium.density *= 1.7;
+            true
+        }),
+        ("phase asymmetry", |s| {
+            s.medium.phase = Phase::HenyeyGreenstein { g: 0.55 };
+            true
+        }),
+        ("light power", |s| {
+            match &mut s.light {
+                Light::Point { intensity, .. } => *intensity *= 2.5,
+                Light::Directional { irradiance, .. } => *irradiance *= 0.4,
+            }
+            true
+        }),
+        ("softening radius", |s| match &mut s.light {
+            Light::Point { radius, .. } => {
+                *radius += 0.05;
+                true
+            }
+            Light::Directional { .. } => false,
+        }),
+    ]
+}
+
+fn scenes() -> Vec<Scene> {
+    let point = Light::Point { position: Vec3::new(0.3, 2.6, 0.2), intensity: Vec3::splat(8.0), radius: 0.0 };
+    let sun = Light::Directional { direction: Vec3::new(0.3, 1.0, 0.2).normalize(), irradiance: Vec3::splat(2.0) };
+    let mut v = vec![occluder_scene(point), occluder_scene(sun)];
+    for s in &mut v {
+        s.medium.phase = Phase::HenyeyGreenstein { g: 0.2 };
+    }
+    v[1].name = "occluder, sun".into();
+    v
+}
+
+/// Every edit of the medium, on a point light and a sun, for VSV and the march: the frame reuses
+/// what the previous frame drew and equals the frame of a renderer that draws everything anew.
+#[test]
+fn medium_edits_reuse_the_volume_and_give_the_same_image() {
+    let (Some(mut r), Some(mut fresh)) = (renderer(), renderer()) else { return };
+    fresh.reuse_unchanged = false;
+    for base in scenes() {
+        for method in [Method::Vsv, Method::Raymarch { steps: 48, jitter: false }] {
+            // Two frames of the base: under the sun the second is the first to read the shadow
+            // map's pyramid (tests/occlusion.rs), which changes the uniforms; from the third on
+            // nothing before Integrate changes.
+            for _ in 0..2 {
+                render(&mut r, &base, method);
+                render(&mut fresh, &base, method);
+            }
+            let mut scene = base.clone();
+            let mut previous = render(&mut fresh, &scene, method);
+            for (what, edit) in medium_edits() {
+                if !edit(&mut scene) {
+                    continue;
+                }
+                let out = render(&mut r, &scene, method);
+                let expected = render(&mut fresh, &scene, method);
+                let case = format!("{} ({method:?}), {what}", scene.name);
+                assert!(expected.reused.is_empty(), "{case}: reused with reuse_unchanged off");
+                let mut drawn = vec![Pass::ShadowMap, Pass::Surface];
+                if method == Method::Vsv {
+                    drawn.extend([Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan]);
+                }
+                assert_eq!(out.reused, drawn, "{case}: ran {:?}", out.passes);
+                assert!(out.passes.iter().all(|p| !drawn.contains(p)), "{case}: ran {:?} again", out.passes);
+                assert!(out.scatter.pixels == expected.scatter.pixels, "{case}: the scattered light differs");
+                assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
+                // The edit changed the picture, so stale light would show.
+                assert!(expected.hdr.pixels != previous.hdr.pixels, "{case}: the edit changed nothing to check");
+                previous = expected;
+            }
+        }
+    }
+}
+
+/// Whatever the passes before Integrate read makes the next frame run all of them.
+#[test]
+fn other_changes_run_every_pass() {
+    let Some(mut r) = renderer() else { return };
+    let base = scenes().remove(0);
+    type Edit = fn(&mut Scene, &mut Renderer);
+    let changes: Vec<(&str, Edit)> = vec![
+        ("camera", |s, _| s.camera.eye += Vec3::new(0.05, 0.0, 0.0)),
+        ("light position", |s, _| {
+            if let Light::Point { position, .. } = &mut s.light {
+                *position += Vec3::new(0.0, 0.1, 0.0);
+            }
+        }),
+        ("grid", |s, _| s.grid.rays /= 2),
+        ("geometry", |s, _| s.meshes[1].positions.iter_mut().for_each(|p| *p += Vec3::new(0.0, 0.05, 0.0))),
+        ("no pruning", |_, r| r.prune = false),
+        ("shadow map size", |_, r| r.set_shadow_map_size(1024).unwrap_or_else(|e| panic!("{e}"))),
+        ("shader reload", |_, r| r.reload(&ShaderLibrary::embedded()).unwrap_or_else(|e| panic!("{e}"))),
+        ("the geometry grid kept", |_, r| r.set_keep_geometry_grid(true)),
+        ("phase function", |s, _| s.medium.phase = Phase::Rayleigh),
+        // Grey extinction takes one channel's exponentials: another variant of the shaders.
+        ("a grey medium", |s, _| {
+            s.medium.scattering = Vec3::splat(0.1);
+            s.medium.absorption = Vec3::splat(0.02);
+        }),
+    ];
+    let mut scene = base.clone();
+    render(&mut r, &scene, Method::Vsv);
+    assert!(!render(&mut r, &scene, Method::Vsv).reused.is_empty(), "the same frame again did not reuse");
+    for (what, change) in changes {
+        change(&mut scene, &mut r);
+        let out = render(&mut r, &scene, Method::Vsv);
+        assert!(out.reused.is_empty(), "{what}: reused {:?}", out.reused);
+        assert!(out.passes.contains(&Pass::Voxelize), "{what}: ran only {:?}", out.passes);
+        assert!(!render(&mut r, &scene, Method::Vsv).reused.is_empty(), "{what}: the next frame did not reuse");
+    }
+    // A medium that stops scattering runs no voxel pass; the one after it that scatters again
+    // must make its volume.
+    scene.medium.density = 0.0;
+    render(&mut r, &scene, Method::Vsv);
+    scene.medium.density = 1.0;
+    let out = render(&mut r, &scene, Method::Vsv);
+    assert!(out.passes.contains(&Pass::Voxelize), "scattering again: ran only {:?}", out.passes);
+    // Switched off, every frame runs every pass.
+    r.reuse_unchanged = false;
+    assert!(render(&mut r, &scene, Method::Vsv).reused.is_empty());
+}
