@@ -505,6 +505,13 @@ fn the_inspector_reads_the_grid_and_links_hover_both_ways() {
     // The grid shown is the full frame's on screen (a preview's coarser grid is never shown).
     let (g_gen, g) = h.state().ed().inspector_grid().expect("no grid read back");
     assert_eq!((g_gen, g.planes, g.rays), (h.state().ed().generation(), 128, 128));
+    // A medium edit reuses the shadow volume (Renderer::reuse_unchanged): the grid is not read back
+    // again, and the inspector does not call the one it holds older than the picture.
+    slider(&h, "density").set_value_accesskit(2.0);
+    let _ = viewport_pixels(&mut h);
+    assert!(h.state().ed().generation() > g_gen, "the edit rendered nothing");
+    assert_eq!(h.state().ed().inspector_grid().map(|g| g.0), Some(g_gen), "the same grid was read back again");
+    assert!(!has_label_containing(&h, "the grid of the last full-quality frame"), "the reused grid is called older");
     // Viewport -> inspector: the pixel under the pointer has a plane and a ray, and the slice
     // follows its plane.
     let r = h.state().ed().viewport_rect().unwrap();

@@ -10,7 +10,7 @@ pub use pictures::{GridSnapshot, InspectorMode};
 use super::{Command, Panel, PanelCtx};
 use crate::editor::display::{FlatPicture, PictureCallback, PictureSlot};
 use crate::editor::jobs::render::INSPECT_LIMIT;
-use crate::render::Method;
+use crate::render::{Method, Pass};
 use eframe::egui;
 use eframe::egui_wgpu;
 use pictures::{export_png, grid_image, slice_image, surface_bins};
@@ -132,7 +132,11 @@ impl Panel for InspectorPanel {
         if iv.mode == InspectorMode::GeometryCount && s.geometry.is_none() {
             ui.label("The geometry grid was not kept for this frame.");
         }
-        if cx.jobs.render.shown.as_ref().is_some_and(|p| p.generation != s.generation) {
+        // A full frame that reused the volume of the one before shows the same grid.
+        let older = cx.jobs.render.shown.as_ref().is_some_and(|p| {
+            p.generation != s.generation && !(p.quality.is_full() && p.info.reused.contains(&Pass::Scan))
+        });
+        if older {
             ui.label(egui::RichText::new("(the grid of the last full-quality frame)").small().weak());
         }
         self.refresh(&s, iv.mode, plane);
