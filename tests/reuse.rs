@@ -91,6 +91,7 @@ fn medium_edits_reuse_the_volume_and_give_the_same_image() {
                 if !edit(&mut scene) {
                     continue;
                 }
+                assert!(r.would_reuse(&scene, W, H, method), "{} ({method:?}), {what}: not foreseen", scene.name);
                 let out = render(&mut r, &scene, method);
                 let expected = render(&mut fresh, &scene, method);
                 let case = format!("{} ({method:?}), {what}", scene.name);
@@ -139,9 +140,13 @@ fn other_changes_run_every_pass() {
     ];
     let mut scene = base.clone();
     render(&mut r, &scene, Method::Vsv);
+    assert!(r.would_reuse(&scene, W, H, Method::Vsv), "the same frame again not foreseen as reusing");
     assert!(!render(&mut r, &scene, Method::Vsv).reused.is_empty(), "the same frame again did not reuse");
+    // Another size needs new targets.
+    assert!(!r.would_reuse(&scene, W + 8, H, Method::Vsv), "another size foreseen as reusing");
     for (what, change) in changes {
         change(&mut scene, &mut r);
+        assert!(!r.would_reuse(&scene, W, H, Method::Vsv), "{what}: foreseen as reusing");
         let out = render(&mut r, &scene, Method::Vsv);
         assert!(out.reused.is_empty(), "{what}: reused {:?}", out.reused);
         assert!(out.passes.contains(&Pass::Voxelize), "{what}: ran only {:?}", out.passes);

@@ -652,27 +652,61 @@ impl Renderer {
             ctx.scoped("binding the passes", || self.rebind())?;
         }
         let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
-        // The test of hidden triangles (a directional light's map, pruning on) reads the pyramid a
-        // frame with the same map left: the frame after the light or the geometry changed runs
-        // without it and reduces its map at its end, when the map is long drawn (reading it before
-        // Cull would make the frame wait for its rasterization). Cull and the map's own list
-        // (every method's) leave the hidden triangles out.
-        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
-        let key = match (&self.geometry, occlusion) {
-            (Some(g), true) => Some(MapInputs::new(g.fingerprint, &shadow_lookup, self.back_face_culling)),
-            _ => None,
-        };
-        let pyramid = &self.passes.shadow_pyramid;
-        let ready = key.is_some() && pyramid.built_from == key;
-        let levels = if ready { pyramid.bound_coarsest() } else { 0 };
-        self.pyramid_to_build = if ready { None } else { key };
-        let v = &self.passes.voxelize;
-        setup.uniforms.work = glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0);
+        let (work, build) = self.frame_work(&setup, &shadow_lookup);
+        setup.uniforms.work = work;
+        self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
         let fingerprint = self.geometry.as_ref().map_or(0, |g| g.fingerprint);
         let key = FrameKey::new(self, scene, &setup, &shadow_lookup, fingerprint);
         Ok((setup, variant, key))
+    }
+
+    /// The frame's `work` uniforms (Voxelize's list shape and the coarsest pyramid level Cull
+    /// reads, 0 for none) and, when the frame is to reduce its shadow map into a pyramid, the
+    /// map's inputs.
+    ///
+    /// The test of hidden triangles (a directional light's map, pruning on) reads the pyramid a
+    /// frame with the same map left: the frame after the light or the geometry changed runs
+    /// without it and reduces its map at its end, when the map is long drawn (reading it before
+    /// Cull would make the frame wait for its rasterization). Cull and the map's own list (every
+    /// method's) leave the hidden triangles out.
+    fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
+        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
+        let key = match (&self.geometry, occlusion) {
+            (Some(g), true) => Some(MapInputs::new(g.fingerprint, shadow, self.back_face_culling)),
+            _ => None,
+        };
+        let pyramid = &self.passes.shadow_pyramid;
+        let ready = key.is_some() && pyramid.built_from == key;
+        let levels = if ready { pyramid.bound_coarsest() } else { 0 };
+        let v = &self.passes.voxelize;
+        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0), if ready { None } else { key })
+    }
+
+    /// Whether a frame of `scene` at `width x height` with `method` would take the shadow map, the
+    /// surfaces and the shadow volume from the last frame ([`Renderer::reuse_unchanged`]), decided
+    /// without rendering or touching anything: the editor renders such a frame at full quality
+    /// at once instead of a preview first.
+    pub fn would_reuse(&self, scene: &Scene, width: u32, height: u32, method: Method) -> bool {
+        let Some((drawn, _)) = &self.drawn else { return false };
+        let fingerprint = scene.geometry_fingerprint();
+        // Anything prepare would make anew (and then forget the last frame for).
+        let same_resources = !self.stale_bindings
+            && self.geometry.as_ref().is_some_and(|g| g.fingerprint == fingerprint)
+            && self.targets.as_ref().is_some_and(|t| (t.width, t.height) == (width, height))
+            && self.grid.as_ref().is_some_and(|(g, _)| *g == scene.grid)
+            && (!self.keep_geometry || self.geometry_copy.is_some());
+        if !self.reuse_unchanged || !same_resources {
+            return false;
+        }
+        let Ok(mut setup) = FrameSetup::with_pruning(scene, width, height, method, self.prune) else { return false };
+        if self.variant != Some(setup.variant(&scene.medium.phase)) {
+            return false;
+        }
+        let (_, shadow, _) = self.passes.shadow_map.uniforms(scene);
+        setup.uniforms.work = self.frame_work(&setup, &shadow).0;
+        FrameKey::new(self, scene, &setup, &shadow, fingerprint) == *drawn
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets

@@ -321,6 +321,9 @@ struct Lane {
     /// The shader variant whose pipelines have run (been compiled by the driver) since the last
     /// (re)build.
     warm: Option<Variant>,
+    /// The size and the time (ms, with read-back and upload) of its last frame that took
+    /// everything before Integrate from the frame before (a medium edit).
+    edit_ms: Option<((u32, u32), f64)>,
 }
 
 impl Lane {
@@ -331,6 +334,7 @@ impl Lane {
             keep_geometry: false,
             stale: None,
             warm: None,
+            edit_ms: None,
         })
     }
 
@@ -349,6 +353,22 @@ impl Lane {
             self.keep_geometry = keep_geometry;
         }
         Ok(())
+    }
+}
+
+/// Whether a frame of `r` at `quality` keeps the grids for the inspector (full frames of a grid
+/// method while the inspector is shown, grids within its limit).
+fn keeps_grids(r: &FrameRequest, quality: Quality) -> bool {
+    quality.is_full() && r.grids && !matches!(r.method, Method::Raymarch { .. }) && r.look.grid.bytes() <= INSPECT_LIMIT
+}
+
+/// Writes what `r` asks for into the worker's copy of its scene: the look, `grid` (the look's or a
+/// preview's), no medium for the surfaces alone.
+fn write_request(scene: &mut Scene, r: &FrameRequest, grid: crate::params::Grid) {
+    r.look.apply_to(scene);
+    scene.grid = grid;
+    if r.surface_only {
+        scene.medium.density = 0.0;
     }
 }
 
@@ -507,6 +527,7 @@ impl Worker {
         if done.is_none()
             && r.progressive
             && self.times.wants_preview(r.method, r.interactive, units, PREVIEW_BUDGET_MS)
+            && !self.full_frame_is_an_edit(r)
         {
             let s =
                 self.times.preview_scale(r.width, r.height, r.look.grid, r.method, r.interactive, PREVIEW_BUDGET_MS);
@@ -515,6 +536,25 @@ impl Worker {
         }
         self.render(r, Quality::Full, send);
         None
+    }
+
+    /// Whether the full-quality renderer would render `r` by taking everything before Integrate
+    /// from its last frame (only the medium or the light's power changed since) and its last such
+    /// frame at this size took less than the preview budget allows: then the full frame comes at
+    /// once, also while a medium slider is dragged, instead of a coarser preview.
+    fn full_frame_is_an_edit(&mut self, r: &FrameRequest) -> bool {
+        let (Some(full), Some((generation, scene))) = (&self.full, self.scene.as_mut()) else { return false };
+        let fits = full.edit_ms.is_some_and(|(size, ms)| size == (r.width, r.height) && ms <= PREVIEW_BUDGET_MS * 1.5);
+        // What Lane::prepare and set_shadow_map_size would change first.
+        let same_lane = full.stale.is_none()
+            && full.scene_generation == Some(r.scene_generation)
+            && full.keep_geometry == keeps_grids(r, Quality::Full)
+            && full.renderer.shadow_map_size() == r.shadow_map;
+        if !fits || !same_lane || *generation != r.scene_generation {
+            return false;
+        }
+        write_request(scene, r, r.look.grid);
+        full.renderer.would_reuse(scene, r.width, r.height, r.method)
     }
 
     /// Renders `r` at `quality` and delivers it; false when it failed.
@@ -537,10 +577,7 @@ impl Worker {
             Quality::Full => (r.width, r.height, r.look.grid),
             Quality::Preview(s) => scaled(r.width, r.height, r.look.grid, s),
         };
-        let keep = quality.is_full()
-            && r.grids
-            && !matches!(r.method, Method::Raymarch { .. })
-            && r.look.grid.bytes() <= INSPECT_LIMIT;
+        let keep = keeps_grids(r, quality);
         if quality.is_full() {
             if let Err(e) = self.full_lane() {
                 return fail(self, e);
@@ -552,11 +589,7 @@ impl Worker {
             (Quality::Preview(_), _) => (r.shadow_map.min(PREVIEW_SHADOW_MAP), &mut self.preview),
         };
         let Some((_, scene)) = self.scene.as_mut() else { return false };
-        r.look.apply_to(scene);
-        scene.grid = grid;
-        if r.surface_only {
-            scene.medium.density = 0.0;
-        }
+        write_request(scene, r, grid);
         let scene = &*scene;
         if let Err(e) = lane.prepare(scene, r.scene_generation, keep) {
             return fail(self, e);
@@ -592,6 +625,9 @@ impl Worker {
         // (seconds on llvmpipe): it says nothing about the next frame's time.
         let warm = lane.warm == Some(info.variant);
         lane.warm = Some(info.variant);
+        if !info.reused.is_empty() {
+            lane.edit_ms = Some(((width, height), total_ms));
+        }
         // Nor does one that took the shadow map, the surfaces and the volume from the frame before.
         if warm && info.reused.is_empty() {
             self.times.record(r.method, r.interactive, work_units(width, height, grid, r.method), total_ms);
