@@ -164,7 +164,7 @@ struct FrameKey {
 }
 
 impl FrameKey {
-    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup, shadow: &ShadowUniforms, geometry: u64) -> FrameKey {
+    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup, shadow: &ShadowUniforms) -> FrameKey {
         let mut u = setup.uniforms;
         // What only the passes from Integrate on read (common.wgsl's Frame).
         u.light_power = glam::Vec4::ZERO;
@@ -173,7 +173,7 @@ impl FrameKey {
         FrameKey {
             uniforms: bytemuck::cast(u),
             shadow: bytemuck::cast(*shadow),
-            geometry,
+            geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
             method: setup.method,
             scatters: scene.needs_scattering(),
             switches: [r.prune, r.shadow_face_culling, r.back_face_culling, r.occlusion_culling, r.keep_geometry],
@@ -657,8 +657,7 @@ impl Renderer {
         self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
-        let fingerprint = self.geometry.as_ref().map_or(0, |g| g.fingerprint);
-        let key = FrameKey::new(self, scene, &setup, &shadow_lookup, fingerprint);
+        let key = FrameKey::new(self, scene, &setup, &shadow_lookup);
         Ok((setup, variant, key))
     }
 
@@ -706,7 +705,8 @@ impl Renderer {
         }
         let (_, shadow, _) = self.passes.shadow_map.uniforms(scene);
         setup.uniforms.work = self.frame_work(&setup, &shadow).0;
-        FrameKey::new(self, scene, &setup, &shadow, fingerprint) == *drawn
+        // (same_resources: the uploaded geometry is this scene's.)
+        FrameKey::new(self, scene, &setup, &shadow) == *drawn
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets
