@@ -1,7 +1,8 @@
 //! A frame whose only changes are the medium's coefficients, its phase function's asymmetry or the
 //! light's power takes the shadow map, the surfaces and the shadow volume from the frame before
-//! (`Renderer::reuse_unchanged`). It must come out the same, bit for bit, as the frame of a
-//! renderer that runs every pass, and every other change must run every pass again.
+//! (`Renderer::reuse_unchanged`); one whose changes leave the shadow map's inputs alone (a camera
+//! move) takes the map. Either must come out the same, bit for bit, as the frame of a renderer that
+//! runs every pass, and every other change must run every pass again.
 
 mod common;
 
@@ -112,45 +113,113 @@ fn medium_edits_reuse_the_volume_and_give_the_same_image() {
     }
 }
 
-/// Whatever the passes before Integrate read makes the next frame run all of them.
+/// Camera moves, on a point light and a sun, for VSV and the march: the frame takes the shadow map
+/// from the frame before, runs every other pass and equals the frame of a renderer that draws
+/// everything anew; a light move draws the map again.
+#[test]
+fn camera_moves_reuse_the_shadow_map_and_give_the_same_image() {
+    let (Some(mut r), Some(mut fresh)) = (renderer(), renderer()) else { return };
+    fresh.reuse_unchanged = false;
+    for base in scenes() {
+        for method in [Method::Vsv, Method::Raymarch { steps: 48, jitter: false }] {
+            // Two frames first: under the sun the second is the first to read the map's pyramid,
+            // which changes the map's draw list (and so its key).
+            for _ in 0..2 {
+                render(&mut r, &base, method);
+                render(&mut fresh, &base, method);
+            }
+            let mut scene = base.clone();
+            let mut previous = render(&mut fresh, &scene, method);
+            for step in 1..=3 {
+                scene.camera.eye += Vec3::new(0.07, 0.02 * step as f32, -0.05);
+                let case = format!("{} ({method:?}), camera move {step}", scene.name);
+                assert!(!r.would_reuse(&scene, W, H, method), "{case}: foreseen as reusing the volume");
+                let out = render(&mut r, &scene, method);
+                let expected = render(&mut fresh, &scene, method);
+                assert!(expected.reused.is_empty(), "{case}: reused with reuse_unchanged off");
+                assert_eq!(out.reused, vec![Pass::ShadowMap], "{case}: ran {:?}", out.passes);
+                assert!(!out.passes.contains(&Pass::ShadowMap), "{case}: drew the map again");
+                assert!(out.passes.contains(&Pass::Surface), "{case}: ran only {:?}", out.passes);
+                assert!(out.scatter.pixels == expected.scatter.pixels, "{case}: the scattered light differs");
+                assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
+                assert!(expected.hdr.pixels != previous.hdr.pixels, "{case}: the move changed nothing to check");
+                previous = expected;
+            }
+            // The light moves: the map is drawn again, and matches the fresh renderer's.
+            match &mut scene.light {
+                Light::Point { position, .. } => *position += Vec3::new(0.1, 0.0, 0.05),
+                Light::Directional { direction, .. } => {
+                    *direction = (*direction + Vec3::new(0.1, 0.0, 0.0)).normalize()
+                }
+            }
+            let out = render(&mut r, &scene, method);
+            let expected = render(&mut fresh, &scene, method);
+            let case = format!("{} ({method:?}), light move", scene.name);
+            assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
+            assert!(out.reused.is_empty(), "{case}: reused {:?}", out.reused);
+        }
+    }
+}
+
+/// Whatever the passes before Integrate read makes the next frame run all of them but, where the
+/// change leaves the shadow map's inputs alone, the map.
 #[test]
 fn other_changes_run_every_pass() {
     let Some(mut r) = renderer() else { return };
     let base = scenes().remove(0);
     type Edit = fn(&mut Scene, &mut Renderer);
-    let changes: Vec<(&str, Edit)> = vec![
-        ("camera", |s, _| s.camera.eye += Vec3::new(0.05, 0.0, 0.0)),
-        ("light position", |s, _| {
-            if let Light::Point { position, .. } = &mut s.light {
-                *position += Vec3::new(0.0, 0.1, 0.0);
-            }
-        }),
-        ("grid", |s, _| s.grid.rays /= 2),
-        ("geometry", |s, _| s.meshes[1].positions.iter_mut().for_each(|p| *p += Vec3::new(0.0, 0.05, 0.0))),
-        ("no pruning", |_, r| r.prune = false),
-        ("shadow map size", |_, r| r.set_shadow_map_size(1024).unwrap_or_else(|e| panic!("{e}"))),
-        ("shader reload", |_, r| r.reload(&ShaderLibrary::embedded()).unwrap_or_else(|e| panic!("{e}"))),
-        ("the geometry grid kept", |_, r| r.set_keep_geometry_grid(true)),
-        ("phase function", |s, _| s.medium.phase = Phase::Rayleigh),
+    // (what, change, whether the map's inputs stay the same)
+    let changes: Vec<(&str, Edit, bool)> = vec![
+        ("camera", |s, _| s.camera.eye += Vec3::new(0.05, 0.0, 0.0), true),
+        (
+            "light position",
+            |s, _| {
+                if let Light::Point { position, .. } = &mut s.light {
+                    *position += Vec3::new(0.0, 0.1, 0.0);
+                }
+            },
+            false,
+        ),
+        // New resources forget everything drawn into the old ones.
+        ("grid", |s, _| s.grid.rays /= 2, false),
+        ("geometry", |s, _| s.meshes[1].positions.iter_mut().for_each(|p| *p += Vec3::new(0.0, 0.05, 0.0)), false),
+        // (A point light's map has no hidden-triangle test, which pruning switches.)
+        ("no pruning", |_, r| r.prune = false, true),
+        ("shadow map size", |_, r| r.set_shadow_map_size(1024).unwrap_or_else(|e| panic!("{e}")), false),
+        ("shader reload", |_, r| r.reload(&ShaderLibrary::embedded()).unwrap_or_else(|e| panic!("{e}")), false),
+        ("the geometry grid kept", |_, r| r.set_keep_geometry_grid(true), true),
+        ("shadow face culling off", |_, r| r.shadow_face_culling = false, false),
+        ("phase function", |s, _| s.medium.phase = Phase::Rayleigh, false),
         // Grey extinction takes one channel's exponentials: another variant of the shaders.
-        ("a grey medium", |s, _| {
-            s.medium.scattering = Vec3::splat(0.1);
-            s.medium.absorption = Vec3::splat(0.02);
-        }),
+        (
+            "a grey medium",
+            |s, _| {
+                s.medium.scattering = Vec3::splat(0.1);
+                s.medium.absorption = Vec3::splat(0.02);
+            },
+            false,
+        ),
     ];
     let mut scene = base.clone();
     render(&mut r, &scene, Method::Vsv);
     assert!(r.would_reuse(&scene, W, H, Method::Vsv), "the same frame again not foreseen as reusing");
-    assert!(!render(&mut r, &scene, Method::Vsv).reused.is_empty(), "the same frame again did not reuse");
+    assert!(
+        render(&mut r, &scene, Method::Vsv).info().reused_all_before_volume(),
+        "the same frame again did not reuse"
+    );
     // Another size needs new targets.
     assert!(!r.would_reuse(&scene, W + 8, H, Method::Vsv), "another size foreseen as reusing");
-    for (what, change) in changes {
+    for (what, change, keeps_map) in changes {
         change(&mut scene, &mut r);
         assert!(!r.would_reuse(&scene, W, H, Method::Vsv), "{what}: foreseen as reusing");
         let out = render(&mut r, &scene, Method::Vsv);
-        assert!(out.reused.is_empty(), "{what}: reused {:?}", out.reused);
+        let map = if keeps_map { vec![Pass::ShadowMap] } else { Vec::new() };
+        assert_eq!(out.reused, map, "{what}: ran {:?}", out.passes);
         assert!(out.passes.contains(&Pass::Voxelize), "{what}: ran only {:?}", out.passes);
-        assert!(!render(&mut r, &scene, Method::Vsv).reused.is_empty(), "{what}: the next frame did not reuse");
+        assert!(
+            render(&mut r, &scene, Method::Vsv).info().reused_all_before_volume(),
+            "{what}: the next frame did not reuse"
+        );
     }
     // A medium that stops scattering runs no voxel pass; the one after it that scatters again
     // must make its volume.
@@ -161,5 +230,7 @@ fn other_changes_run_every_pass() {
     assert!(out.passes.contains(&Pass::Voxelize), "scattering again: ran only {:?}", out.passes);
     // Switched off, every frame runs every pass.
     r.reuse_unchanged = false;
+    assert!(render(&mut r, &scene, Method::Vsv).reused.is_empty());
+    scene.camera.eye += Vec3::new(0.05, 0.0, 0.0);
     assert!(render(&mut r, &scene, Method::Vsv).reused.is_empty());
 }

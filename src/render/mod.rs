@@ -92,10 +92,20 @@ pub struct FrameInfo {
     /// The passes that ran, in order (also without timestamps).
     pub passes: Vec<Pass>,
     /// The passes whose results this frame took from the previous one instead of running them
-    /// (nothing they read had changed: [`Renderer::reuse_unchanged`]); empty for a whole frame.
+    /// (nothing they read had changed: [`Renderer::reuse_unchanged`]); empty for a whole frame,
+    /// the shadow map alone when only the camera (or something else the map does not read)
+    /// changed.
     pub reused: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
+}
+
+impl FrameInfo {
+    /// Whether the frame took everything before the volume's integration from the frame before
+    /// (a medium edit): it ran Integrate (or Raymarch) and Composite alone.
+    pub fn reused_all_before_volume(&self) -> bool {
+        self.reused.contains(&Pass::Surface)
+    }
 }
 
 /// What fitting the work to the frame kept (DESIGN section 6), for `--json` and the Stats panel.
@@ -153,30 +163,59 @@ impl RenderOutput {
 /// shadow map, shader reload or variant) forgets the key altogether.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct FrameKey {
+    /// The shadow map's inputs, which the later passes read too.
+    map: MapKey,
     uniforms: [u8; std::mem::size_of::<FrameUniforms>()],
-    shadow: [u8; std::mem::size_of::<ShadowUniforms>()],
-    geometry: u64,
     method: Method,
     /// Whether the medium scatters at all: without it no voxel pass runs.
     scatters: bool,
-    /// prune, shadow_face_culling, back_face_culling, occlusion_culling, keep_geometry.
-    switches: [bool; 5],
+    /// prune, keep_geometry.
+    switches: [bool; 2],
 }
 
 impl FrameKey {
-    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup, shadow: &ShadowUniforms) -> FrameKey {
+    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup) -> FrameKey {
         let mut u = setup.uniforms;
         // What only the passes from Integrate on read (common.wgsl's Frame).
         u.light_power = glam::Vec4::ZERO;
         u.sigma_s = glam::Vec4::ZERO;
         u.sigma_t = glam::Vec4::ZERO;
         FrameKey {
+            map: MapKey::new(r, scene, setup),
             uniforms: bytemuck::cast(u),
-            shadow: bytemuck::cast(*shadow),
-            geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
             method: setup.method,
             scatters: scene.needs_scattering(),
-            switches: [r.prune, r.shadow_face_culling, r.back_face_culling, r.occlusion_culling, r.keep_geometry],
+            switches: [r.prune, r.keep_geometry],
+        }
+    }
+}
+
+/// Everything the shadow map is drawn from: the light's faces and lookup uniforms (the light, the
+/// map's size and fit), the geometry, the draw list's culling (which also depends on the pyramid
+/// of hidden triangles being ready) and the culling switches. The camera is not among them: a frame
+/// whose camera alone moved takes the map from the frame before (and so does every frame that
+/// changes only what the passes after the map read). A change of resources or pipelines forgets
+/// it with the rest (`FrameKey`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct MapKey {
+    faces: [u8; std::mem::size_of::<[FaceUniforms; 6]>()],
+    lookup: [u8; std::mem::size_of::<ShadowUniforms>()],
+    geometry: u64,
+    /// The coarsest pyramid level Cull and the map's list test hidden triangles at (0: none).
+    hidden: u32,
+    /// shadow_face_culling, back_face_culling, occlusion_culling.
+    switches: [bool; 3],
+}
+
+impl MapKey {
+    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup) -> MapKey {
+        let (faces, lookup, _) = r.passes.shadow_map.uniforms(scene);
+        MapKey {
+            faces: bytemuck::cast(faces),
+            lookup: bytemuck::cast(lookup),
+            geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
+            hidden: setup.uniforms.work.z,
+            switches: [r.shadow_face_culling, r.back_face_culling, r.occlusion_culling],
         }
     }
 }
@@ -298,7 +337,9 @@ pub struct Renderer {
     /// Take the shadow map, the surfaces and the shadow volume from the previous frame when
     /// nothing they depend on changed (`FrameKey`): a frame that only changes the medium's
     /// coefficients, its phase asymmetry or the light's power runs Integrate (or Raymarch) and
-    /// Composite alone. On by default; `epivox bench` turns it off to time whole frames.
+    /// Composite alone. A frame whose changes leave the map's inputs alone (a camera move:
+    /// `MapKey`) takes the map only. On by default; `epivox bench` turns it off to time whole
+    /// frames.
     pub reuse_unchanged: bool,
     /// The inputs of the last frame that ran the passes before Integrate (or Raymarch) and
     /// completed, and which of them it ran; `None` after anything that may change their results
@@ -657,7 +698,7 @@ impl Renderer {
         self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
-        let key = FrameKey::new(self, scene, &setup, &shadow_lookup);
+        let key = FrameKey::new(self, scene, &setup);
         Ok((setup, variant, key))
     }
 
@@ -706,7 +747,7 @@ impl Renderer {
         let (_, shadow, _) = self.passes.shadow_map.uniforms(scene);
         setup.uniforms.work = self.frame_work(&setup, &shadow).0;
         // (same_resources: the uploaded geometry is this scene's.)
-        FrameKey::new(self, scene, &setup, &shadow) == *drawn
+        FrameKey::new(self, scene, &setup) == *drawn
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets
@@ -721,12 +762,17 @@ impl Renderer {
     ) -> Result<FrameInfo, RenderError> {
         let (setup, v, key) = self.prepare(scene, width, height, method)?;
         // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
-        // results are still in the targets, the shadow map and the grid.
-        let reused = match self.drawn.take() {
-            Some((drawn, ran)) if self.reuse_unchanged && drawn == key => ran,
+        // results are still in the targets, the shadow map and the grid. Or only the map's inputs
+        // are the same (the camera moved): the map is still in its texture.
+        let drawn = self.drawn.take().filter(|_| self.reuse_unchanged);
+        let reuse = drawn.as_ref().is_some_and(|(d, _)| *d == key);
+        let map_reused =
+            !reuse && drawn.as_ref().is_some_and(|(d, ran)| d.map == key.map && ran.contains(&Pass::ShadowMap));
+        let reused = match drawn {
+            Some((_, ran)) if reuse => ran,
+            _ if map_reused => vec![Pass::ShadowMap],
             _ => Vec::new(),
         };
-        let reuse = !reused.is_empty();
         if let Some(g) = self.geometry.as_mut() {
             g.gpu.update_light_facing(&self.ctx.queue, &scene.light, self.back_face_culling);
         }
@@ -753,8 +799,10 @@ impl Renderer {
             let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
             let culling =
                 ShadowCulling { faces: self.shadow_face_culling, hidden: u.work.z, light_facing: g.light_facing() };
-            p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
-            f.mark(Pass::ShadowMap);
+            if !map_reused {
+                p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
+                f.mark(Pass::ShadowMap);
+            }
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
             p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
             f.mark(Pass::Surface);
@@ -817,11 +865,10 @@ impl Renderer {
             if build.is_some() {
                 self.passes.shadow_pyramid.built_from = build;
             }
-            let drawn = if reuse {
-                info.reused.clone()
-            } else {
-                info.passes.iter().copied().filter(|p| Pass::BEFORE_VOLUME.contains(p)).collect()
-            };
+            let drawn = Pass::BEFORE_VOLUME
+                .into_iter()
+                .filter(|p| info.passes.contains(p) || info.reused.contains(p))
+                .collect();
             self.drawn = Some((key, drawn));
         }
         done

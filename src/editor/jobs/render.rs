@@ -625,11 +625,11 @@ impl Worker {
         // (seconds on llvmpipe): it says nothing about the next frame's time.
         let warm = lane.warm == Some(info.variant);
         lane.warm = Some(info.variant);
-        if !info.reused.is_empty() {
+        if info.reused_all_before_volume() {
             lane.edit_ms = Some(((width, height), total_ms));
         }
         // Nor does one that took the shadow map, the surfaces and the volume from the frame before.
-        if warm && info.reused.is_empty() {
+        if warm && !info.reused_all_before_volume() {
             self.times.record(r.method, r.interactive, work_units(width, height, grid, r.method), total_ms);
         }
         self.delivered = Some((r.generation, quality.is_full()));
