@@ -71,46 +71,58 @@ fn scenes() -> Vec<Scene> {
     v
 }
 
-/// Every edit of the medium, on a point light and a sun, for VSV and the march: the frame reuses
-/// what the previous frame drew and equals the frame of a renderer that draws everything anew.
-#[test]
-fn medium_edits_reuse_the_volume_and_give_the_same_image() {
+/// Runs `case` for each scene of [`scenes`] and each method, VSV and the march, with a renderer
+/// that reuses (`r`) and one that runs every pass (`fresh`), both after two frames of the scene:
+/// under the sun the second is the first to read the shadow map's pyramid (tests/occlusion.rs),
+/// which changes the uniforms and the map's draw list; from the third on nothing changes.
+fn for_each_warm_case(mut case: impl FnMut(&mut Renderer, &mut Renderer, &Scene, Method)) {
     let (Some(mut r), Some(mut fresh)) = (renderer(), renderer()) else { return };
     fresh.reuse_unchanged = false;
     for base in scenes() {
         for method in [Method::Vsv, Method::Raymarch { steps: 48, jitter: false }] {
-            // Two frames of the base: under the sun the second is the first to read the shadow
-            // map's pyramid (tests/occlusion.rs), which changes the uniforms; from the third on
-            // nothing before Integrate changes.
             for _ in 0..2 {
                 render(&mut r, &base, method);
                 render(&mut fresh, &base, method);
             }
-            let mut scene = base.clone();
-            let mut previous = render(&mut fresh, &scene, method);
-            for (what, edit) in medium_edits() {
-                if !edit(&mut scene) {
-                    continue;
-                }
-                assert!(r.would_reuse(&scene, W, H, method), "{} ({method:?}), {what}: not foreseen", scene.name);
-                let out = render(&mut r, &scene, method);
-                let expected = render(&mut fresh, &scene, method);
-                let case = format!("{} ({method:?}), {what}", scene.name);
-                assert!(expected.reused.is_empty(), "{case}: reused with reuse_unchanged off");
-                let mut drawn = vec![Pass::ShadowMap, Pass::Surface];
-                if method == Method::Vsv {
-                    drawn.extend([Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan]);
-                }
-                assert_eq!(out.reused, drawn, "{case}: ran {:?}", out.passes);
-                assert!(out.passes.iter().all(|p| !drawn.contains(p)), "{case}: ran {:?} again", out.passes);
-                assert!(out.scatter.pixels == expected.scatter.pixels, "{case}: the scattered light differs");
-                assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
-                // The edit changed the picture, so stale light would show.
-                assert!(expected.hdr.pixels != previous.hdr.pixels, "{case}: the edit changed nothing to check");
-                previous = expected;
-            }
+            case(&mut r, &mut fresh, &base, method);
         }
     }
+}
+
+/// The reusing frame equals the fresh renderer's bit for bit, and differs from the frame before.
+fn assert_same_images(case: &str, out: &RenderOutput, expected: &RenderOutput, previous: &RenderOutput) {
+    assert!(expected.reused.is_empty(), "{case}: reused with reuse_unchanged off");
+    assert!(out.scatter.pixels == expected.scatter.pixels, "{case}: the scattered light differs");
+    assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
+    // The change moved the picture, so stale results would show.
+    assert!(expected.hdr.pixels != previous.hdr.pixels, "{case}: the change altered nothing to check");
+}
+
+/// Every edit of the medium, on a point light and a sun, for VSV and the march: the frame reuses
+/// what the previous frame drew and equals the frame of a renderer that draws everything anew.
+#[test]
+fn medium_edits_reuse_the_volume_and_give_the_same_image() {
+    for_each_warm_case(|r, fresh, base, method| {
+        let mut scene = base.clone();
+        let mut previous = render(fresh, &scene, method);
+        for (what, edit) in medium_edits() {
+            if !edit(&mut scene) {
+                continue;
+            }
+            let case = format!("{} ({method:?}), {what}", scene.name);
+            assert!(r.would_reuse(&scene, W, H, method), "{case}: not foreseen");
+            let out = render(r, &scene, method);
+            let expected = render(fresh, &scene, method);
+            let mut drawn = vec![Pass::ShadowMap, Pass::Surface];
+            if method == Method::Vsv {
+                drawn.extend([Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan]);
+            }
+            assert_eq!(out.reused, drawn, "{case}: ran {:?}", out.passes);
+            assert!(out.passes.iter().all(|p| !drawn.contains(p)), "{case}: ran {:?} again", out.passes);
+            assert_same_images(&case, &out, &expected, &previous);
+            previous = expected;
+        }
+    });
 }
 
 /// Camera moves, on a point light and a sun, for VSV and the march: the frame takes the shadow map
@@ -118,47 +130,32 @@ fn medium_edits_reuse_the_volume_and_give_the_same_image() {
 /// everything anew; a light move draws the map again.
 #[test]
 fn camera_moves_reuse_the_shadow_map_and_give_the_same_image() {
-    let (Some(mut r), Some(mut fresh)) = (renderer(), renderer()) else { return };
-    fresh.reuse_unchanged = false;
-    for base in scenes() {
-        for method in [Method::Vsv, Method::Raymarch { steps: 48, jitter: false }] {
-            // Two frames first: under the sun the second is the first to read the map's pyramid,
-            // which changes the map's draw list (and so its key).
-            for _ in 0..2 {
-                render(&mut r, &base, method);
-                render(&mut fresh, &base, method);
-            }
-            let mut scene = base.clone();
-            let mut previous = render(&mut fresh, &scene, method);
-            for step in 1..=3 {
-                scene.camera.eye += Vec3::new(0.07, 0.02 * step as f32, -0.05);
-                let case = format!("{} ({method:?}), camera move {step}", scene.name);
-                assert!(!r.would_reuse(&scene, W, H, method), "{case}: foreseen as reusing the volume");
-                let out = render(&mut r, &scene, method);
-                let expected = render(&mut fresh, &scene, method);
-                assert!(expected.reused.is_empty(), "{case}: reused with reuse_unchanged off");
-                assert_eq!(out.reused, vec![Pass::ShadowMap], "{case}: ran {:?}", out.passes);
-                assert!(!out.passes.contains(&Pass::ShadowMap), "{case}: drew the map again");
-                assert!(out.passes.contains(&Pass::Surface), "{case}: ran only {:?}", out.passes);
-                assert!(out.scatter.pixels == expected.scatter.pixels, "{case}: the scattered light differs");
-                assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
-                assert!(expected.hdr.pixels != previous.hdr.pixels, "{case}: the move changed nothing to check");
-                previous = expected;
-            }
-            // The light moves: the map is drawn again, and matches the fresh renderer's.
-            match &mut scene.light {
-                Light::Point { position, .. } => *position += Vec3::new(0.1, 0.0, 0.05),
-                Light::Directional { direction, .. } => {
-                    *direction = (*direction + Vec3::new(0.1, 0.0, 0.0)).normalize()
-                }
-            }
-            let out = render(&mut r, &scene, method);
-            let expected = render(&mut fresh, &scene, method);
-            let case = format!("{} ({method:?}), light move", scene.name);
-            assert!(out.hdr.pixels == expected.hdr.pixels, "{case}: the final image differs");
-            assert!(out.reused.is_empty(), "{case}: reused {:?}", out.reused);
+    for_each_warm_case(|r, fresh, base, method| {
+        let mut scene = base.clone();
+        let mut previous = render(fresh, &scene, method);
+        for step in 1..=3 {
+            scene.camera.eye += Vec3::new(0.07, 0.02 * step as f32, -0.05);
+            let case = format!("{} ({method:?}), camera move {step}", scene.name);
+            assert!(!r.would_reuse(&scene, W, H, method), "{case}: foreseen as reusing the volume");
+            let out = render(r, &scene, method);
+            let expected = render(fresh, &scene, method);
+            assert_eq!(out.reused, vec![Pass::ShadowMap], "{case}: ran {:?}", out.passes);
+            assert!(!out.passes.contains(&Pass::ShadowMap), "{case}: drew the map again");
+            assert!(out.passes.contains(&Pass::Surface), "{case}: ran only {:?}", out.passes);
+            assert_same_images(&case, &out, &expected, &previous);
+            previous = expected;
         }
-    }
+        // The light moves: the map is drawn again, and matches the fresh renderer's.
+        match &mut scene.light {
+            Light::Point { position, .. } => *position += Vec3::new(0.1, 0.0, 0.05),
+            Light::Directional { direction, .. } => *direction = (*direction + Vec3::new(0.1, 0.0, 0.0)).normalize(),
+        }
+        let out = render(r, &scene, method);
+        let expected = render(fresh, &scene, method);
+        let case = format!("{} ({method:?}), light move", scene.name);
+        assert_same_images(&case, &out, &expected, &previous);
+        assert!(out.reused.is_empty(), "{case}: reused {:?}", out.reused);
+    });
 }
 
 /// Whatever the passes before Integrate read makes the next frame run all of them but, where the
