@@ -174,14 +174,28 @@ struct FrameKey {
 }
 
 impl FrameKey {
-    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup) -> FrameKey {
+    /// `faces` and `lookup`: the shadow map's uniforms for `scene` (`ShadowMap::uniforms`, which
+    /// the caller has already computed: it walks every vertex).
+    fn new(
+        r: &Renderer,
+        scene: &Scene,
+        setup: &FrameSetup,
+        faces: &[FaceUniforms; 6],
+        lookup: &ShadowUniforms,
+    ) -> FrameKey {
         let mut u = setup.uniforms;
         // What only the passes from Integrate on read (common.wgsl's Frame).
         u.light_power = glam::Vec4::ZERO;
         u.sigma_s = glam::Vec4::ZERO;
         u.sigma_t = glam::Vec4::ZERO;
         FrameKey {
-            map: MapKey::new(r, scene, setup),
+            map: MapKey {
+                faces: bytemuck::cast(*faces),
+                lookup: bytemuck::cast(*lookup),
+                geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
+                hidden: setup.uniforms.work.z,
+                switches: [r.shadow_face_culling, r.back_face_culling, r.occlusion_culling],
+            },
             uniforms: bytemuck::cast(u),
             method: setup.method,
             scatters: scene.needs_scattering(),
@@ -205,19 +219,6 @@ struct MapKey {
     hidden: u32,
     /// shadow_face_culling, back_face_culling, occlusion_culling.
     switches: [bool; 3],
-}
-
-impl MapKey {
-    fn new(r: &Renderer, scene: &Scene, setup: &FrameSetup) -> MapKey {
-        let (faces, lookup, _) = r.passes.shadow_map.uniforms(scene);
-        MapKey {
-            faces: bytemuck::cast(faces),
-            lookup: bytemuck::cast(lookup),
-            geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
-            hidden: setup.uniforms.work.z,
-            switches: [r.shadow_face_culling, r.back_face_culling, r.occlusion_culling],
-        }
-    }
 }
 
 /// Size-dependent targets.
@@ -692,13 +693,13 @@ impl Renderer {
             let ctx = self.ctx.clone();
             ctx.scoped("binding the passes", || self.rebind())?;
         }
-        let (_, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
+        let (faces, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
         let (work, build) = self.frame_work(&setup, &shadow_lookup);
         setup.uniforms.work = work;
         self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
-        let key = FrameKey::new(self, scene, &setup);
+        let key = FrameKey::new(self, scene, &setup, &faces, &shadow_lookup);
         Ok((setup, variant, key))
     }
 
@@ -744,10 +745,10 @@ impl Renderer {
         if self.variant != Some(setup.variant(&scene.medium.phase)) {
             return false;
         }
-        let (_, shadow, _) = self.passes.shadow_map.uniforms(scene);
+        let (faces, shadow, _) = self.passes.shadow_map.uniforms(scene);
         setup.uniforms.work = self.frame_work(&setup, &shadow).0;
         // (same_resources: the uploaded geometry is this scene's.)
-        FrameKey::new(self, scene, &setup) == *drawn
+        FrameKey::new(self, scene, &setup, &faces, &shadow) == *drawn
     }
 
     /// Renders one frame of `scene` at `width x height` into the GPU targets
