@@ -11,10 +11,11 @@
 // DrawIndexedIndirect arguments.
 //
 // `sun`: a directional map draws, into region 0, the triangles that are not a solid's faces away
-// from the light and that the pyramid of an earlier frame with the same map does not show hidden
-// (hidden.wgsl): at every texel centre such a triangle covers, the map holds a nearer depth, so
-// the map drawn without them is the same map, bit for bit, and its binning (single-threaded on
-// llvmpipe) has fewer triangles to set up.
+// from the light, that do not lie wholly beyond one side of the map (once ShadowFit narrowed it to
+// the view, most of a large scene) and that the pyramid of an earlier frame with the same map does
+// not show hidden (hidden.wgsl): at every texel centre such a triangle covers, the map holds a
+// nearer depth, so the map drawn without them is the same map, bit for bit, and its binning
+// (single-threaded on llvmpipe) has fewer triangles to set up.
 
 #import hidden
 
@@ -97,8 +98,16 @@ fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups
     let p2 = position(i2);
     // A solid's face away from the sun (Cull's test); edge-on faces (dot 0) are kept.
     if (sides[triangle_meshes[t]] * dot(cross(p1 - p0, p2 - p0), cull_in.light.xyz) < 0.0) { return; }
+    // Wholly beyond one side of the map (fitted to the view, ShadowFit): it covers no texel.
+    let m = cull_in.view_proj;
+    let n0 = (m * vec4f(p0, 1.0)).xy;
+    let n1 = (m * vec4f(p1, 1.0)).xy;
+    let n2 = (m * vec4f(p2, 1.0)).xy;
+    // A margin for the rounding of the matrix: a triangle the rasterizer would draw is never cut.
+    let edge = vec2f(1.0 + 1e-5);
+    if (any((n0 > edge) & (n1 > edge) & (n2 > edge)) || any((n0 < -edge) & (n1 < -edge) & (n2 < -edge))) { return; }
     let c = cull_in.counts;
-    if (hidden_in_pyramid(cull_in.view_proj, f32(c.w), c.z, p0, p1, p2)) { return; }
+    if (hidden_in_pyramid(m, f32(c.w), c.z, p0, p1, p2)) { return; }
     let at = atomicAdd(&args[0], 3u);
     lists[at] = i0;
     lists[at + 1u] = i1;

@@ -31,8 +31,10 @@ struct ShadowCoords {
     value: f32,
     // Point light: near * |P - L| / a(P - L), so that a stored depth d means this / d.
     per_depth: f32,
-    // False outside the map: the map covers every caster but backdrops (Scene::core_bounds), so a
-    // point projecting outside it can only be shadowed by a backdrop, which lies under everything.
+    // False outside the map. Fitted to the view (shadow_fit.wgsl), the map holds every point the
+    // frame looks up; spread over the casters (ShadowMap::uniforms) it covers every caster but
+    // backdrops (Scene::core_bounds), so a point projecting outside it can only be shadowed by a
+    // backdrop, which lies under everything.
     inside: bool,
 }
 

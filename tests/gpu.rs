@@ -134,7 +134,7 @@ fn timings_cover_every_pass() {
     let names: Vec<&str> = out.timings.iter().map(|t| t.pass.label()).collect();
     assert_eq!(
         names,
-        ["shadow_map", "surface", "ranges", "cull", "voxelize", "scan", "scatter_table", "integrate", "composite"]
+        ["surface", "shadow_map", "ranges", "cull", "voxelize", "scan", "scatter_table", "integrate", "composite"]
     );
     assert!(out.timings.iter().all(|t| t.ms.is_finite() && t.ms >= 0.0));
     assert!(out.total_ms() > 0.0);

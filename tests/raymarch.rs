@@ -103,7 +103,7 @@ fn timings_name_the_raymarch_pass_and_shadow_map_size_is_a_setting() {
     let small = r.render(&scene, 32, 32, Method::Raymarch { steps: 64, jitter: false }).unwrap();
     if r.ctx.timestamps {
         let names: Vec<&str> = small.timings.iter().map(|t| t.pass.label()).collect();
-        assert_eq!(names, ["shadow_map", "surface", "raymarch", "composite"]);
+        assert_eq!(names, ["surface", "shadow_map", "raymarch", "composite"]);
     }
     // Too large for the adapter: refused with the limit, and the old map keeps working.
     let err = r.set_shadow_map_size(1 << 20).unwrap_err().to_string();

@@ -284,7 +284,7 @@ pub fn resolution_sweep(quick: bool) -> Vec<u32> {
 }
 
 /// Passes every method runs; the rest are the method's own ("volume" time).
-pub const SHARED_PASSES: [Pass; 3] = [Pass::ShadowMap, Pass::Surface, Pass::Composite];
+pub const SHARED_PASSES: [Pass; 4] = [Pass::Surface, Pass::ShadowFit, Pass::ShadowMap, Pass::Composite];
 
 /// Median times of one point.
 #[derive(Debug, Clone, PartialEq)]

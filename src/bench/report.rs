@@ -341,8 +341,8 @@ pub fn markdown(r: &BenchResults) -> String {
         "\nErrors are of the in-scattered radiance against the f64 reference (relative RMSE = RMSE over the \
          mean reference value; PSNR with the brightest reference value as peak); `final` is the relative \
          RMSE of the whole image. `volume` is the method's own passes (VSV and Cartesian: every pass but the \
-         three below; raymarch: raymarch); `total` adds the shadow map, surface and composite passes every \
-         method runs. ● marks a point on its method's Pareto front.\n"
+         four below; raymarch: raymarch); `total` adds the surface, the sun's shadow-map fit, the shadow map \
+         and composite passes every method runs. ● marks a point on its method's Pareto front.\n"
     );
 
     let _ = writeln!(s, "## Error against time\n\n![error against time](error_vs_time.png)\n");

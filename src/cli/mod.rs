@@ -136,6 +136,11 @@ pub struct RenderArgs {
     /// Turn off fitting the work to the frame (DESIGN section 6): full bin range from the casters.
     #[arg(long)]
     pub no_prune: bool,
+    /// Spread a sun's shadow map over the casters' whole rectangle instead of narrowing it to what
+    /// the view looks up (to compare: the surfaces' shadows and the march's then come from coarser
+    /// texels).
+    #[arg(long)]
+    pub no_shadow_fit: bool,
     #[arg(long, value_parser = parse_samples, help = samples_help())]
     pub samples: Option<usize>,
     #[arg(long, value_parser = parse_steps,
@@ -443,6 +448,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 renderer.set_shadow_map_size(size).context("--shadow-map")?;
             }
             renderer.prune = !args.no_prune;
+            renderer.fit_shadow_map = !args.no_shadow_fit;
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;

@@ -22,6 +22,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),
     ("display.wgsl", include_str!("../../shaders/display.wgsl")),
     ("ranges.wgsl", include_str!("../../shaders/ranges.wgsl")),
+    ("shadow_fit.wgsl", include_str!("../../shaders/shadow_fit.wgsl")),
     ("cull.wgsl", include_str!("../../shaders/cull.wgsl")),
     ("triangle_bounds.wgsl", include_str!("../../shaders/triangle_bounds.wgsl")),
     ("shadow_lookup.wgsl", include_str!("../../shaders/shadow_lookup.wgsl")),

@@ -24,6 +24,7 @@ mod raymarch;
 mod scan;
 mod scatter_table;
 mod scene_gpu;
+mod shadow_fit;
 mod shadow_map;
 mod shadow_pyramid;
 mod surface;
@@ -41,8 +42,9 @@ pub use raymarch::{Raymarch, RaymarchBindings, RaymarchUniforms};
 pub use scan::{Scan, ScanBindings};
 pub use scatter_table::{ScatterTable, ScatterTableBindings};
 pub use scene_gpu::SceneGpu;
+pub use shadow_fit::{fit_key, FitKey, FitResult, ShadowFit, ShadowFitBindings};
 pub use shadow_map::{
-    FaceUniforms, ShadowCullBindings, ShadowCullUniforms, ShadowCulling, ShadowMap, ShadowMapBindings, ShadowUniforms,
+    FaceUniforms, MapDrawing, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
 pub use shadow_pyramid::{MapInputs, ShadowPyramid, ShadowPyramidBindings};
 pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
@@ -194,7 +196,8 @@ impl FrameKey {
                 lookup: bytemuck::cast(*lookup),
                 geometry: r.geometry.as_ref().map_or(0, |g| g.fingerprint),
                 hidden: setup.uniforms.work.z,
-                switches: [r.shadow_face_culling, r.back_face_culling, r.occlusion_culling],
+                view: fit_key(r.fits_map(setup), &setup.uniforms),
+                switches: [r.shadow_face_culling, r.back_face_culling, r.occlusion_culling, r.fits_map(setup)],
             },
             uniforms: bytemuck::cast(u),
             method: setup.method,
@@ -205,11 +208,12 @@ impl FrameKey {
 }
 
 /// Everything the shadow map is drawn from: the light's faces and lookup uniforms (the light, the
-/// map's size and fit), the geometry, the draw list's culling (which also depends on the pyramid
-/// of hidden triangles being ready) and the culling switches. The camera is not among them: a frame
-/// whose camera alone moved takes the map from the frame before (and so does every frame that
-/// changes only what the passes after the map read). A change of resources or pipelines forgets
-/// it with the rest (`FrameKey`).
+/// map's size and the casters' fit), the geometry, the draw list's culling (which also depends on
+/// the pyramid of hidden triangles being ready), the culling switches and, for a map fitted to the
+/// view ([`ShadowFit`]: a directional light), the view. Under a point light the camera is not among
+/// them: a frame whose camera alone moved takes the map from the frame before (and so does every
+/// frame that changes only what the passes after the map read). A change of resources or
+/// pipelines forgets it with the rest (`FrameKey`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct MapKey {
     faces: [u8; std::mem::size_of::<[FaceUniforms; 6]>()],
@@ -217,8 +221,10 @@ struct MapKey {
     geometry: u64,
     /// The coarsest pyramid level Cull and the map's list test hidden triangles at (0: none).
     hidden: u32,
-    /// shadow_face_culling, back_face_culling, occlusion_culling.
-    switches: [bool; 3],
+    /// What the fitted map's rectangle depends on (zero where it is not fitted).
+    view: FitKey,
+    /// shadow_face_culling, back_face_culling, occlusion_culling, and whether the map is fitted.
+    switches: [bool; 4],
 }
 
 /// Size-dependent targets.
@@ -238,8 +244,9 @@ struct Targets {
 
 /// Every pass, created together so that a reload either replaces all of them or none.
 struct Passes {
-    shadow_map: ShadowMap,
     surface: Surface,
+    shadow_fit: ShadowFit,
+    shadow_map: ShadowMap,
     ranges: Ranges,
     shadow_pyramid: ShadowPyramid,
     cull: Cull,
@@ -256,8 +263,9 @@ impl Passes {
         let d = &ctx.device;
         ctx.scoped("creating the pipelines", || -> Result<Passes, GpuError> {
             Ok(Passes {
-                shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 surface: Surface::new(d, lib)?,
+                shadow_fit: ShadowFit::new(d, lib)?,
+                shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 ranges: Ranges::new(d, lib)?,
                 shadow_pyramid: ShadowPyramid::new(d, lib)?,
                 cull: Cull::new(d, lib)?,
@@ -277,8 +285,9 @@ impl Passes {
     fn prepare(&mut self, ctx: &GpuContext, variant: Variant) -> Result<(), GpuError> {
         let d = &ctx.device;
         ctx.scoped(&format!("creating the pipelines for a {variant}"), || {
-            self.shadow_map.prepare(d, variant);
             self.surface.prepare(d, variant);
+            self.shadow_fit.prepare(d, variant);
+            self.shadow_map.prepare(d, variant);
             self.ranges.prepare(d, variant);
             self.cull.prepare(d, variant);
             self.voxelize.prepare(d, variant);
@@ -329,9 +338,15 @@ pub struct Renderer {
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
     /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
     /// on its own only to compare, `tests/occlusion.rs`). It reads the pyramid of an earlier frame
-    /// whose map had the same inputs (the light, the geometry, the map's size): the frame after a
-    /// change runs without it and reduces its own map at its end.
+    /// whose map had the same inputs (the light, the geometry, the map's size and the view the map
+    /// is fitted to): the frame after a change runs without it and reduces its own map at its end.
     pub occlusion_culling: bool,
+    /// Directional lights: narrow the shadow map to the rectangle the frame's view segments cover
+    /// ([`ShadowFit`]; on by default, off only to compare, `tests/shadow_fit.rs`). The camera then
+    /// joins the map's inputs: a camera move draws the sun's map again.
+    pub fit_shadow_map: bool,
+    /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
+    last_fitted: bool,
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
@@ -394,6 +409,8 @@ impl Renderer {
             shadow_face_culling: true,
             back_face_culling: true,
             occlusion_culling: true,
+            fit_shadow_map: true,
+            last_fitted: false,
             pyramid_to_build: None,
             reuse_unchanged: true,
             drawn: None,
@@ -621,6 +638,7 @@ impl Renderer {
         p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
         p.surface.bind(d, SurfaceBindings { frame_in: frame() });
+        p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
@@ -715,7 +733,12 @@ impl Renderer {
     fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
         let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
         let key = match (&self.geometry, occlusion) {
-            (Some(g), true) => Some(MapInputs::new(g.fingerprint, shadow, self.back_face_culling)),
+            (Some(g), true) => Some(MapInputs::new(
+                g.fingerprint,
+                shadow,
+                fit_key(self.fits_map(setup), &setup.uniforms),
+                self.back_face_culling,
+            )),
             _ => None,
         };
         let pyramid = &self.passes.shadow_pyramid;
@@ -723,6 +746,12 @@ impl Renderer {
         let levels = if ready { pyramid.bound_coarsest() } else { 0 };
         let v = &self.passes.voxelize;
         (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0), if ready { None } else { key })
+    }
+
+    /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
+    /// with [`Renderer::fit_shadow_map`] on.
+    fn fits_map(&self, setup: &FrameSetup) -> bool {
+        self.fit_shadow_map && !setup.frame.is_point()
     }
 
     /// Whether a frame of `scene` at `width x height` with `method` would take the shadow map, the
@@ -771,6 +800,8 @@ impl Renderer {
             !reuse && drawn.as_ref().is_some_and(|(d, ran)| d.map == key.map && ran.contains(&Pass::ShadowMap));
         let reused = match drawn {
             Some((_, ran)) if reuse => ran,
+            // (A fitted map's fit is one of its inputs, taken over with it.)
+            _ if map_reused && self.fits_map(&setup) => vec![Pass::ShadowFit, Pass::ShadowMap],
             _ if map_reused => vec![Pass::ShadowMap],
             _ => Vec::new(),
         };
@@ -790,6 +821,7 @@ impl Renderer {
         }
         let g = &geometry.gpu;
         let u = &setup.uniforms;
+        let fitted = self.fits_map(&setup);
         // The frame: an ordered list of passes.
         if !reuse {
             // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
@@ -798,15 +830,29 @@ impl Renderer {
             let eye_runs = g.draw_runs(&g.eye_facing(eye, near_corner, self.back_face_culling));
             let ahead = 2.0 * near.max(1e-4);
             let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
-            let culling =
-                ShadowCulling { faces: self.shadow_face_culling, hidden: u.work.z, light_facing: g.light_facing() };
-            if !map_reused {
-                p.shadow_map.record(queue, &mut f.enc, v, scene, g, culling);
-                f.mark(Pass::ShadowMap);
-            }
+            let drawing = MapDrawing {
+                faces: self.shadow_face_culling,
+                hidden: u.work.z,
+                light_facing: g.light_facing(),
+                fit: fitted.then_some(&p.shadow_fit),
+            };
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
             p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
             f.mark(Pass::Surface);
+            // The map follows the view when it is fitted: never reused across a camera move (MapKey).
+            if !map_reused {
+                if fitted {
+                    p.shadow_fit.record(&mut f.enc, v, &self.shadow_uniforms, width, height);
+                    f.mark(Pass::ShadowFit);
+                }
+                p.shadow_map.record(queue, &mut f.enc, v, scene, g, drawing);
+                p.surface.rebind_targets(&mut f.enc, &t.material, &t.distance);
+                f.mark(Pass::ShadowMap);
+            }
+        }
+        if fitted && (reuse || map_reused) {
+            // prepare wrote the casters' fit: the map in place was drawn with this frame's fit.
+            p.shadow_fit.copy_lookup(&mut f.enc, &self.shadow_uniforms);
         }
         match method {
             Method::Raymarch { steps, jitter } => {
@@ -862,6 +908,7 @@ impl Renderer {
         }
         let done = self.finish(f, setup, v, reused);
         self.timer = timer;
+        self.last_fitted = fitted && done.is_ok();
         if let Ok(info) = &done {
             if build.is_some() {
                 self.passes.shadow_pyramid.built_from = build;
@@ -938,6 +985,18 @@ impl Renderer {
             .chunks_exact(2)
             .map(|c| if c[0] >= 0.0 { c[0] } else { f32::INFINITY })
             .collect())
+    }
+
+    /// The last frame's fit of its directional shadow map ([`ShadowFit`]: the view-projection the
+    /// map was drawn and looked up with, its texel size and its rectangle in the casters' map
+    /// coordinates), or `None` when that frame's map was not fitted (a point light, or
+    /// [`Renderer::fit_shadow_map`] off).
+    pub fn read_shadow_fit(&self) -> Result<Option<FitResult>, GpuError> {
+        if !self.last_fitted {
+            return Ok(None);
+        }
+        let bytes = self.ctx.read_buffer(&self.passes.shadow_fit.result)?;
+        Ok(Some(bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<FitResult>()])))
     }
 
     /// Voxelize's work items per thread and 32-bit words of bins per item (each at least 1; the
@@ -1043,12 +1102,14 @@ mod layout_tests {
     #[test]
     fn dispatch_constants_match_wgsl() {
         assert_eq!(wgsl_u32("ranges.wgsl", "ROWS"), Ranges::ROWS);
+        assert_eq!(wgsl_u32("shadow_fit.wgsl", "ROWS"), ShadowFit::ROWS);
         assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);
     }
 
     #[test]
     fn shadow_uniforms_match_wgsl() {
+        check("shadow_fit.wgsl", "Fit", fields!(FitResult: extremes, view_proj, texel, rect), size_of::<FitResult>());
         check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());
         check(
             "shadow_pyramid.wgsl",
@@ -1119,6 +1180,7 @@ mod binding_tests {
         check("shadow_cull.wgsl", ShadowCullBindings::SLOTS);
         check("surface.wgsl", SurfaceBindings::SLOTS);
         check("ranges.wgsl", RangesBindings::SLOTS);
+        check("shadow_fit.wgsl", ShadowFitBindings::SLOTS);
         check("shadow_pyramid.wgsl", ShadowPyramidBindings::SLOTS);
         check("cull.wgsl", CullBindings::SLOTS);
         check("voxelize.wgsl", VoxelizeBindings::SLOTS);

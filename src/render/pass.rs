@@ -7,10 +7,12 @@ use std::fmt;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Pass {
+    /// What the surfaces' lighting needs of the nearest surface, and the eye distance per pixel.
+    Surface,
+    /// The directional shadow map's rectangle, fitted to the view segments.
+    ShadowFit,
     /// Distance from the light to the nearest surface (cube or orthographic map).
     ShadowMap,
-    /// Direct lighting of the surfaces, and the eye distance per pixel.
-    Surface,
     /// The bins' z range fitted to the visible depth.
     Ranges,
     /// The triangles that can shadow a visible point, and Voxelize's work list.
@@ -35,12 +37,13 @@ pub enum Pass {
 impl Pass {
     /// The passes before the volume's integration (Integrate or Raymarch): a frame whose inputs to
     /// them did not change takes their results from the last frame (`Renderer::reuse_unchanged`).
-    pub const BEFORE_VOLUME: [Pass; 6] =
-        [Pass::ShadowMap, Pass::Surface, Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan];
+    pub const BEFORE_VOLUME: [Pass; 7] =
+        [Pass::Surface, Pass::ShadowFit, Pass::ShadowMap, Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan];
     /// Every pass, in frame order.
-    pub const ALL: [Pass; 11] = [
-        Pass::ShadowMap,
+    pub const ALL: [Pass; 12] = [
         Pass::Surface,
+        Pass::ShadowFit,
+        Pass::ShadowMap,
         Pass::Ranges,
         Pass::Cull,
         Pass::Voxelize,
@@ -55,8 +58,9 @@ impl Pass {
     /// The name in reports, JSON keys and CSV columns (`shadow_map`).
     pub fn label(self) -> &'static str {
         match self {
-            Pass::ShadowMap => "shadow_map",
             Pass::Surface => "surface",
+            Pass::ShadowFit => "shadow_fit",
+            Pass::ShadowMap => "shadow_map",
             Pass::Ranges => "ranges",
             Pass::ShadowPyramid => "shadow_pyramid",
             Pass::Cull => "cull",

@@ -3,7 +3,9 @@
 //! Point light: a cube of six 90-degree faces around the light, reversed infinite perspective
 //! (`depth = near / a`, `a` the distance along the face's axis). Directional light: one
 //! orthographic view along `-w` over the rectangle the casters' box projects to across the light
-//! (`depth = s / far`, `s` the distance from a plane beyond the scene). Depth only: no fragment
+//! (`depth = s / far`, `s` the distance from a plane beyond the scene), narrowed on the GPU to the
+//! part of it the frame looks up ([`super::ShadowFit`], which runs after Surface: the face's matrix
+//! and the lookups' are copied from its result). Depth only: no fragment
 //! shader and no colour target, which on llvmpipe took six 2048² faces over 100 000 triangles
 //! from 190–215 to 136–145 ms (docs/results.md). The lookups
 //! (`shaders/shadow_lookup.wgsl`) turn a stored depth back into a distance along the point's own
@@ -75,8 +77,8 @@ struct FaceLists {
     index_count: u32,
 }
 
-/// What [`ShadowMap::record`] leaves out.
-pub struct ShadowCulling<'a> {
+/// How [`ShadowMap::record`] draws the map: what it leaves out, and the fit it draws with.
+pub struct MapDrawing<'a> {
     /// Point light: each cube face draws only the triangles that can reach it. Sun: the map draws
     /// a list of the triangles it needs (solids' faces toward the light, and not hidden).
     pub faces: bool,
@@ -85,6 +87,9 @@ pub struct ShadowCulling<'a> {
     pub hidden: u32,
     /// Per mesh: the faces the light can see first ([`SceneGpu::update_light_facing`]).
     pub light_facing: &'a [Facing],
+    /// A directional map fitted to the view: the pass whose result replaces the casters' fit in
+    /// the face's matrix and the draw list's parameters (`None`: the casters' fit, or a cube).
+    pub fit: Option<&'a super::ShadowFit>,
 }
 
 /// One face's uniforms (`struct Face` in the WGSL).
@@ -382,11 +387,11 @@ impl ShadowMap {
         variant: Variant,
         scene: &Scene,
         geometry: &SceneGpu,
-        culling: ShadowCulling,
+        drawing: MapDrawing,
     ) {
         // Renderer::render_frame prepares every variant it records.
         let Some(pipelines) = self.pipelines.get(variant) else { return };
-        let face_culling = culling.faces;
+        let face_culling = drawing.faces;
         let (faces, _, count) = self.uniforms(scene);
         let culled = match (&self.face_lists, scene.light) {
             (Some(fl), light) if face_culling && count == if light.is_point() { 6 } else { 1 } => {
@@ -396,10 +401,17 @@ impl ShadowMap {
                 };
                 let u = ShadowCullUniforms {
                     light,
-                    counts: [fl.triangles, fl.index_count, culling.hidden, self.size],
+                    counts: [fl.triangles, fl.index_count, drawing.hidden, self.size],
                     view_proj: faces[0].view_proj,
                 };
                 queue.write_buffer(&self.cull_uniforms, 0, bytemuck::bytes_of(&u));
+                if let Some(fit) = drawing.fit {
+                    fit.copy_matrix(
+                        encoder,
+                        &self.cull_uniforms,
+                        std::mem::offset_of!(ShadowCullUniforms, view_proj) as u64,
+                    );
+                }
                 encoder.copy_buffer_to_buffer(&fl.args_init, 0, &fl.args, 0, fl.args_init.size());
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("ShadowMap::cull_pass"),
@@ -417,10 +429,15 @@ impl ShadowMap {
         };
         // Without face lists the solids the light lies outside of draw only their faces toward
         // it, mesh runs at a time (the face lists already left the others out).
-        let runs = if culled.is_none() { geometry.draw_runs(culling.light_facing) } else { Vec::new() };
+        let runs = if culled.is_none() { geometry.draw_runs(drawing.light_facing) } else { Vec::new() };
         for (i, face) in faces.iter().enumerate().take(count) {
             let (uniforms, bind_group, view) = &self.faces[i];
             queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
+            // A directional map fitted to the view (one face): ShadowFit's matrix replaces the
+            // casters' fit (the queue's write lands before the frame's commands).
+            if let Some(fit) = drawing.fit {
+                fit.copy_matrix(encoder, uniforms, std::mem::offset_of!(FaceUniforms, view_proj) as u64);
+            }
             let clear = Self::empty(variant.point_light);
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("ShadowMap::pass"),

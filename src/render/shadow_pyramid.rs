@@ -61,17 +61,20 @@ pub struct ShadowPyramid {
 
 /// The inputs of a directional shadow map, compared bit for bit: the scene's geometry (its
 /// fingerprint), the map's matrices and parameters (the light's direction, the casters'
-/// rectangle, the size) and whether solids draw one side.
+/// rectangle, the size), the view its rectangle is fitted to ([`super::ShadowFit`]) and whether
+/// solids draw one side.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MapInputs {
     geometry: u64,
     shadow: [u8; std::mem::size_of::<super::ShadowUniforms>()],
+    /// The view a fitted map follows ([`super::fit_key`]; zero when not fitted).
+    view: super::FitKey,
     one_sided: bool,
 }
 
 impl MapInputs {
-    pub fn new(geometry: u64, shadow: &super::ShadowUniforms, one_sided: bool) -> MapInputs {
-        MapInputs { geometry, shadow: bytemuck::cast(*shadow), one_sided }
+    pub fn new(geometry: u64, shadow: &super::ShadowUniforms, view: super::FitKey, one_sided: bool) -> MapInputs {
+        MapInputs { geometry, shadow: bytemuck::cast(*shadow), view, one_sided }
     }
 }
 

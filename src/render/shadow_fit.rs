@@ -1,0 +1,169 @@
+//! ShadowFit: the directional shadow map's rectangle fitted to what the frame looks up
+//! (`shaders/shadow_fit.wgsl`).
+//!
+//! [`super::ShadowMap::uniforms`] fits the sun's orthographic map to the casters' box across the
+//! light, which does not depend on the camera; on the classroom that is 48 x 14 m, of which the
+//! view sees 13 x 5 m. This pass takes the view segments' ends from the Surface pass's distances
+//! (the surface points Composite lights, and the stretch inside the medium's box the march
+//! samples), their rectangle in the casters' map coordinates `m = (M_core P).xy`, and narrows the
+//! map to it: `M_fit = S M_core`, `S` mapping the rectangle `[a, b]` (widened to steps of 1/32 of
+//! the casters' rectangle and half a texel) onto `[-1, 1]^2`. Casters outside it cannot shadow a
+//! point inside it (they project outside it along the light too). The renderer copies `M_fit` and
+//! the new texel size into the map's face uniforms, its draw list's parameters and the lookups'
+//! `ShadowFaces` before the map is drawn: no CPU round trip, and every method (VSV's surfaces,
+//! the march's volume) gets the finer map.
+
+use super::util::{bindings, Kind};
+use super::variant::{Specialised, SpecialisedCompute, Variant};
+use crate::gpu::{GpuError, ShaderLibrary};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+
+bindings! {
+    /// ShadowFit's bind group (shadow_fit.wgsl; `fit` is the pass's own result buffer).
+    ShadowFitBindings { frame_in: Kind::Storage, shadow: Kind::Storage, distance: Kind::Texture, fit: Kind::StorageRw }
+}
+
+/// The pass's result (`struct Fit` in shadow_fit.wgsl; a layout test checks it).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct FitResult {
+    /// Order-preserving codes of the view segments' extremes (`reduce`'s scratch).
+    pub extremes: [u32; 4],
+    /// The fitted map's view-projection.
+    pub view_proj: Mat4,
+    /// Its texel size, the coarser side, in scene units.
+    pub texel: f32,
+    pub _pad: [f32; 3],
+    /// The fitted rectangle `(a.x, a.y, b.x, b.y)` in the casters' map coordinates (`[-1, 1]`).
+    pub rect: Vec4,
+}
+
+pub struct ShadowFit {
+    pipelines: SpecialisedCompute<2>,
+    layout: wgpu::BindGroupLayout,
+    bind_group: Option<wgpu::BindGroup>,
+    /// A [`FitResult`].
+    pub result: wgpu::Buffer,
+}
+
+impl ShadowFit {
+    /// Pixels per thread of `reduce`, a column (shadow_fit.wgsl's `ROWS`).
+    pub const ROWS: u32 = 16;
+    const VIEW_PROJ: u64 = std::mem::offset_of!(FitResult, view_proj) as u64;
+    const TEXEL: u64 = std::mem::offset_of!(FitResult, texel) as u64;
+
+    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<ShadowFit, GpuError> {
+        let module = lib.module(device, "shadow_fit.wgsl")?;
+        let layout = ShadowFitBindings::layout(device, "ShadowFit::layout", wgpu::ShaderStages::COMPUTE);
+        let result = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ShadowFit::result"),
+            size: std::mem::size_of::<FitResult>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(ShadowFit {
+            pipelines: SpecialisedCompute::new(
+                device,
+                "ShadowFit",
+                module,
+                &layout,
+                ["reduce", "finish"],
+                Specialised::Light,
+            ),
+            layout,
+            bind_group: None,
+            result,
+        })
+    }
+
+    /// (Re)binds the inputs; called when the targets change.
+    pub fn bind(
+        &mut self,
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        shadow: &wgpu::Buffer,
+        distance: &wgpu::TextureView,
+    ) {
+        let b = ShadowFitBindings {
+            frame_in: frame.as_entire_binding(),
+            shadow: shadow.as_entire_binding(),
+            distance: wgpu::BindingResource::TextureView(distance),
+            fit: self.result.as_entire_binding(),
+        };
+        self.bind_group = Some(b.bind(device, "ShadowFit::bind_group", &self.layout));
+    }
+
+    /// Builds the pipelines specialised to `variant` unless they exist.
+    pub fn prepare(&mut self, device: &wgpu::Device, variant: Variant) {
+        self.pipelines.prepare(device, variant);
+    }
+
+    /// Fits the map to the frame's view segments (after Surface), from the casters' fit that
+    /// `shadow_uniforms` holds, then writes the fit into it ([`ShadowFit::copy_lookup`]).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        variant: Variant,
+        shadow_uniforms: &wgpu::Buffer,
+        width: u32,
+        height: u32,
+    ) {
+        // Renderer::render_frame prepares every variant it records and binds before it records.
+        let (Some([reduce, finish]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else {
+            return;
+        };
+        encoder.clear_buffer(&self.result, 0, Some(16));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("ShadowFit::pass"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.set_pipeline(reduce);
+            pass.dispatch_workgroups(width.div_ceil(64), height.div_ceil(Self::ROWS), 1);
+            pass.set_pipeline(finish);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        self.copy_lookup(encoder, shadow_uniforms);
+    }
+
+    /// Writes the last fit's matrix and texel size into the lookups' `ShadowFaces` (whose CPU
+    /// copy holds the casters' fit): also in a frame that reuses the map drawn with it.
+    pub fn copy_lookup(&self, encoder: &mut wgpu::CommandEncoder, shadow_uniforms: &wgpu::Buffer) {
+        use super::ShadowUniforms as S;
+        encoder.copy_buffer_to_buffer(&self.result, Self::VIEW_PROJ, shadow_uniforms, 0, 64);
+        let texel = std::mem::offset_of!(S, params) as u64 + 4;
+        encoder.copy_buffer_to_buffer(&self.result, Self::TEXEL, shadow_uniforms, texel, 4);
+    }
+
+    /// Writes the last fit's matrix into `buffer` at `offset` (the map's face uniforms, its draw
+    /// list's parameters).
+    pub fn copy_matrix(&self, encoder: &mut wgpu::CommandEncoder, buffer: &wgpu::Buffer, offset: u64) {
+        encoder.copy_buffer_to_buffer(&self.result, Self::VIEW_PROJ, buffer, offset, 64);
+    }
+}
+
+/// What a fitted map depends on besides the casters' fit: the view segments, that is the camera,
+/// the image's size and the medium's box (with the geometry and the culling switches, which the
+/// keys hold anyway). All zero where the map is not fitted (a point light, or the fit off): there
+/// the camera does not change the map.
+pub type FitKey = [u8; 112];
+
+pub fn fit_key(fitted: bool, u: &super::FrameUniforms) -> FitKey {
+    #[repr(C)]
+    #[derive(Clone, Copy, Pod, Zeroable)]
+    struct View {
+        camera: [Vec4; 4],
+        medium: [Vec4; 2],
+        image: glam::UVec4,
+    }
+    if !fitted {
+        return [0; 112];
+    }
+    bytemuck::cast(View {
+        camera: [u.cam_right, u.cam_up, u.cam_fwd, u.eye],
+        medium: [u.medium_min, u.medium_max],
+        image: u.image,
+    })
+}
