@@ -3,11 +3,24 @@
 // then does not voxelize the triangle) and by the shadow map's sun list (shadow_cull.wgsl, which
 // then does not draw it: it could not win the depth test at any texel centre it covers).
 //
-// The importing file declares `pyramid: array<f32>` (levels PYRAMID_FIRST_LEVEL to the coarsest,
-// one after the other).
+// The importing file declares `pyramid: array<f32>`: the view-projection of the map it was made
+// from (PYRAMID_MATRIX_FLOATS floats, column by column), then levels PYRAMID_FIRST_LEVEL to the
+// coarsest, one after the other.
 
 // The shadow pyramid's finest level (ShadowPyramid::FIRST_LEVEL): blocks of 4x4 texels.
 const PYRAMID_FIRST_LEVEL: u32 = 2u;
+// Floats before the first level (ShadowPyramid::MATRIX_FLOATS).
+const PYRAMID_MATRIX_FLOATS: u32 = 16u;
+
+// The view-projection the pyramid's map was drawn with (a sun's map fitted to an earlier view may
+// differ from this frame's).
+fn pyramid_matrix() -> mat4x4f {
+    return mat4x4f(pyramid_column(0u), pyramid_column(1u), pyramid_column(2u), pyramid_column(3u));
+}
+
+fn pyramid_column(i: u32) -> vec4f {
+    return vec4f(pyramid[4u * i], pyramid[4u * i + 1u], pyramid[4u * i + 2u], pyramid[4u * i + 3u]);
+}
 
 // Whether the directional shadow map shows the triangle behind nearer surfaces all around it:
 // its nearest depth (an orthographic depth is linear, so a vertex's) lies beyond the farthest
@@ -36,7 +49,7 @@ fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2
     let b = vec2u(hi);
     // The first level whose blocks hold the range in three per side, and where it starts.
     var level = PYRAMID_FIRST_LEVEL;
-    var offset = 0u;
+    var offset = PYRAMID_MATRIX_FLOATS;
     let size = u32(n);
     loop {
         if (all((b >> vec2u(level)) - (a >> vec2u(level)) <= vec2u(2u))) { break; }

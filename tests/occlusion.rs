@@ -3,8 +3,9 @@
 //! after the scan, so the shadow volume must come out the same, bit for bit, where no occluder
 //! has a gap narrower than a shadow-map texel (the scene below has none). The map itself leaves
 //! them out too (they cannot win its depth test), for every method: the same map, bit for bit. Cull reads the pyramid an
-//! earlier frame with the same map left (`ShadowPyramid::built_from`): the first frame after the
-//! light or the geometry changed culls nothing.
+//! earlier frame with the same casters and light left (`ShadowPyramid::built_from`), also after a
+//! camera move, which fits the sun's map to another rectangle (`ShadowFit`): the first frame after
+//! the light or the geometry changed culls nothing.
 
 mod common;
 
@@ -67,8 +68,25 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
         // The shadow map drawn without the hidden triangles is the same map: the lit surfaces too.
         assert!(on.0.hdr.pixels == other.0.hdr.pixels, "the final image differs");
     }
-    // A new light direction draws another map: one frame without the test, then with it again.
+    // A camera move fits the map to another rectangle: Cull still reads the pyramid of the map
+    // fitted to the old view (with that map's matrix) and the frame makes a pyramid of its own;
+    // its shadow volume and images are those of a renderer that culls no hidden triangle.
     r.occlusion_culling = true;
+    frame(&mut r, &room);
+    let mut moved = room.clone();
+    moved.camera.eye += Vec3::new(0.4, -0.1, 0.3);
+    let after = frame(&mut r, &moved);
+    assert!(after.1.culled_hidden > 0, "the camera move dropped the test");
+    assert!(after.0.passes.contains(&Pass::ShadowFit), "the map was not fitted anew: {:?}", after.0.passes);
+    assert!(after.0.passes.contains(&Pass::ShadowPyramid), "no pyramid of the new fit: {:?}", after.0.passes);
+    let Some(mut plain) = renderer() else { return };
+    plain.occlusion_culling = false;
+    let expected = frame(&mut plain, &moved);
+    let differing = after.2.iter().zip(&expected.2).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "after the camera move {differing} words of the shadow volume differ");
+    assert!(after.0.scatter.pixels == expected.0.scatter.pixels, "after the camera move the scattered light differs");
+    assert!(after.0.hdr.pixels == expected.0.hdr.pixels, "after the camera move the final image differs");
+    // A new light direction draws another map: one frame without the test, then with it again.
     let mut turned = room.clone();
     turned.light =
         Light::Directional { direction: Vec3::new(-0.1, 1.0, 0.15).normalize(), irradiance: Vec3::splat(3.0) };

@@ -391,16 +391,19 @@ impl Renderer {
         // variant of a shader for every distinct value of the uniforms that steer its control flow
         // (uniform inlining), 0.1-0.7 s per pass for every camera or light move; it never inlines
         // storage buffers. GPUs read both alike (docs/results.md, "The first frame").
-        let uniform = |label: &str, size: usize| {
+        let uniform = |label: &str, size: usize, usage: wgpu::BufferUsages| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: size as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | usage,
                 mapped_at_creation: false,
             })
         };
-        let frame_buffer = uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>());
-        let shadow_uniforms = uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>());
+        let frame_buffer =
+            uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>(), wgpu::BufferUsages::empty());
+        // The pyramid keeps a copy of the matrix its map was drawn with (ShadowPyramid::record).
+        let shadow_uniforms =
+            uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>(), wgpu::BufferUsages::COPY_SRC);
         let timer = GpuTimer::new(&ctx);
         Ok(Renderer {
             ctx,
@@ -726,10 +729,11 @@ impl Renderer {
     /// map's inputs.
     ///
     /// The test of hidden triangles (a directional light's map, pruning on) reads the pyramid a
-    /// frame with the same map left: the frame after the light or the geometry changed runs
-    /// without it and reduces its map at its end, when the map is long drawn (reading it before
-    /// Cull would make the frame wait for its rasterization). Cull and the map's own list (every
-    /// method's) leave the hidden triangles out.
+    /// frame with the same casters and light left, whatever view its map was fitted to: the frame
+    /// after the light or the geometry changed runs without it, and every frame whose map's inputs
+    /// changed reduces its map at its end, when the map is long drawn (reading it before Cull
+    /// would make the frame wait for its rasterization). Cull and the map's own list (every
+    /// method's; only from a pyramid of the same matrix) leave the hidden triangles out.
     fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
         let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
         let key = match (&self.geometry, occlusion) {
@@ -742,10 +746,14 @@ impl Renderer {
             _ => None,
         };
         let pyramid = &self.passes.shadow_pyramid;
-        let ready = key.is_some() && pyramid.built_from == key;
-        let levels = if ready { pyramid.bound_coarsest() } else { 0 };
+        // A pyramid of the same casters in the same light serves whatever view its map was fitted
+        // to (Cull projects with the matrix it holds; the map's list only reads one of this very
+        // matrix); one made from other inputs in any way is made anew at this frame's end.
+        let usable = matches!((&pyramid.built_from, &key), (Some(b), Some(k)) if b.same_but_view(k));
+        let levels = if usable { pyramid.bound_coarsest() } else { 0 };
         let v = &self.passes.voxelize;
-        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0), if ready { None } else { key })
+        let build = if pyramid.built_from == key { None } else { key };
+        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0), build)
     }
 
     /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
@@ -903,7 +911,7 @@ impl Renderer {
         // For the frames after this one, while its map's inputs stay the same.
         let build = self.pyramid_to_build.take();
         if build.is_some() {
-            p.shadow_pyramid.record(&mut f.enc);
+            p.shadow_pyramid.record(&mut f.enc, &self.shadow_uniforms);
             f.mark(Pass::ShadowPyramid);
         }
         let done = self.finish(f, setup, v, reused);
@@ -1105,6 +1113,7 @@ mod layout_tests {
         assert_eq!(wgsl_u32("shadow_fit.wgsl", "ROWS"), ShadowFit::ROWS);
         assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);
+        assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_MATRIX_FLOATS"), ShadowPyramid::MATRIX_FLOATS);
     }
 
     #[test]

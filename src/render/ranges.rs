@@ -75,22 +75,11 @@ impl Ranges {
         height: u32,
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
-        let (Some([reduce, finish]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else {
-            return;
-        };
+        let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         encoder.clear_buffer(&self.result, 0, None);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("Ranges::pass"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.set_pipeline(reduce);
-            // A thread per column of `ROWS` pixels (ranges.wgsl), 64 columns per workgroup.
-            pass.dispatch_workgroups(width.div_ceil(64), height.div_ceil(Self::ROWS), 1);
-            pass.set_pipeline(finish);
-            pass.dispatch_workgroups(1, 1, 1);
-        }
+        // A thread per column of `ROWS` pixels (ranges.wgsl), 64 columns per workgroup.
+        let size = (width, height, Self::ROWS);
+        super::util::record_reduction(encoder, "Ranges::pass", pipelines, bind_group, size);
         self.copy_range(encoder, frame_uniforms);
     }
 

@@ -110,21 +110,10 @@ impl ShadowFit {
         height: u32,
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
-        let (Some([reduce, finish]), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else {
-            return;
-        };
+        let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         encoder.clear_buffer(&self.result, 0, Some(16));
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("ShadowFit::pass"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.set_pipeline(reduce);
-            pass.dispatch_workgroups(width.div_ceil(64), height.div_ceil(Self::ROWS), 1);
-            pass.set_pipeline(finish);
-            pass.dispatch_workgroups(1, 1, 1);
-        }
+        let size = (width, height, Self::ROWS);
+        super::util::record_reduction(encoder, "ShadowFit::pass", pipelines, bind_group, size);
         self.copy_lookup(encoder, shadow_uniforms);
     }
 

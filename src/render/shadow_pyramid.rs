@@ -10,12 +10,16 @@
 //! room are such, under its roof. Approximate only where an occluder has a gap narrower than a texel
 //! between texel centres (docs/pruning.md).
 //!
-//! The pyramid is made at the end of a frame, for the frames after it: a later frame whose map has
-//! the same inputs ([`MapInputs`]: the geometry, the light's matrices, the size) draws the
-//! same map, so its Cull reads this one, and the frame never waits for its own map's
-//! rasterization (on llvmpipe, which draws it on its raster threads beside Cull and Voxelize, that
-//! wait cost what the culling saved: docs/results.md, session 17). The frame after the light or the
-//! geometry changed runs without the test and makes the pyramid anew.
+//! The pyramid is made at the end of a frame, for the frames after it, and holds the map's
+//! view-projection before its levels: a later frame whose map has the same inputs but for the view
+//! a sun's map is fitted to ([`MapInputs`]: the geometry, the light's matrices, the size) has the
+//! same casters in the same light, so its Cull reads this one, projecting with the matrix it was
+//! made with, and the frame never waits for its own map's rasterization (on llvmpipe, which draws
+//! it on its raster threads beside Cull and Voxelize, that wait cost what the culling saved:
+//! docs/results.md, session 17). The map's own draw list reads it only where the matrix is its
+//! own (shadow_cull.wgsl compares): there leaving the hidden triangles out gives the same map bit
+//! for bit. The frame after the light or the geometry changed runs without the test; a frame whose
+//! map's inputs changed at all makes the pyramid anew.
 //!
 //! Directional lights only: the cube map of a point light is not reduced (its Cull keeps every
 //! triangle the other tests keep).
@@ -49,8 +53,9 @@ pub struct ShadowPyramid {
     from_map: wgpu::ComputePipeline,
     from_level: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
-    /// Levels [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the other
-    /// (cull.wgsl computes the same offsets from the map's size).
+    /// The view-projection of the map it was made from ([`ShadowPyramid::MATRIX_FLOATS`] floats),
+    /// then levels [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the
+    /// other (hidden.wgsl computes the same offsets from the map's size).
     pub pyramid: Option<wgpu::Buffer>,
     /// The map size the pyramid and its bind groups were made for, and one bind group per level.
     bound: Option<(u32, Vec<(wgpu::BindGroup, u32)>)>,
@@ -73,6 +78,11 @@ pub struct MapInputs {
 }
 
 impl MapInputs {
+    /// The same casters in the same light: equal but for the view a fitted map follows.
+    pub fn same_but_view(&self, other: &MapInputs) -> bool {
+        MapInputs { view: other.view, ..*self } == *other
+    }
+
     pub fn new(geometry: u64, shadow: &super::ShadowUniforms, view: super::FitKey, one_sided: bool) -> MapInputs {
         MapInputs { geometry, shadow: bytemuck::cast(*shadow), view, one_sided }
     }
@@ -86,6 +96,9 @@ impl ShadowPyramid {
     /// The coarsest level: blocks of 128 texels. A triangle wider than three of them is seldom
     /// hidden whole (11 levels drop none more on the classroom).
     pub const MAX_LEVEL: u32 = 7;
+    /// Floats before the first level: the map's view-projection (hidden.wgsl's
+    /// `PYRAMID_MATRIX_FLOATS`).
+    pub const MATRIX_FLOATS: u32 = 16;
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<ShadowPyramid, GpuError> {
         let module = lib.module(device, "shadow_pyramid.wgsl")?;
@@ -115,7 +128,7 @@ impl ShadowPyramid {
     /// texels per side.
     pub fn level_params(size: u32) -> Vec<Level> {
         let mut out = Vec::new();
-        let mut offset = 0;
+        let mut offset = Self::MATRIX_FLOATS;
         let mut src = (size, 0);
         let first = Self::FIRST_LEVEL.min(Self::coarsest(size) + 1);
         for l in first..=Self::coarsest(size) {
@@ -134,13 +147,13 @@ impl ShadowPyramid {
             return;
         }
         let params = Self::level_params(size);
-        let floats = params.last().map_or(1, |l| l.dst_offset + l.dst_size * l.dst_size);
+        let floats = params.last().map_or(Self::MATRIX_FLOATS, |l| l.dst_offset + l.dst_size * l.dst_size);
         if self.pyramid.as_ref().is_none_or(|b| b.size() != floats as u64 * 4) {
             self.built_from = None;
             self.pyramid = Some(device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("ShadowPyramid::pyramid"),
                 size: floats as u64 * 4,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }));
         }
@@ -169,9 +182,11 @@ impl ShadowPyramid {
         self.bound = Some((size, groups));
     }
 
-    /// Reduces the map, level by level.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) {
-        let Some((_, groups)) = &self.bound else { return };
+    /// Reduces the map, level by level, after the view-projection it was drawn with (the first
+    /// matrix of `shadow_uniforms`, the lookups' `ShadowFaces`, which holds the fitted one).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, shadow_uniforms: &wgpu::Buffer) {
+        let (Some((_, groups)), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
+        encoder.copy_buffer_to_buffer(shadow_uniforms, 0, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ShadowPyramid::pass"),
             timestamp_writes: None,
@@ -198,8 +213,9 @@ mod tests {
     fn levels_halve_and_follow_one_another() {
         let p = ShadowPyramid::level_params(2048);
         assert_eq!(p.len(), 6);
-        assert_eq!(p[0], Level { src_size: 2048, dst_size: 512, src_offset: 0, dst_offset: 0 });
-        assert_eq!(p[1], Level { src_size: 512, dst_size: 256, src_offset: 0, dst_offset: 512 * 512 });
+        let m = ShadowPyramid::MATRIX_FLOATS;
+        assert_eq!(p[0], Level { src_size: 2048, dst_size: 512, src_offset: 0, dst_offset: m });
+        assert_eq!(p[1], Level { src_size: 512, dst_size: 256, src_offset: m, dst_offset: m + 512 * 512 });
         assert_eq!(p[5].dst_size, 16);
         assert_eq!(ShadowPyramid::coarsest(2048), 7);
         // Odd sizes round up: the last texel of a level covers the map's edge.

@@ -187,6 +187,25 @@ pub fn compute_pipeline(
 pub const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
 
+/// Records a reduction over the image's pixels in one compute pass: `reduce` with a thread per
+/// column of `rows` pixels and 64 columns a workgroup, then `finish` on one thread (Ranges,
+/// ShadowFit).
+pub fn record_reduction(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    [reduce, finish]: &[wgpu::ComputePipeline; 2],
+    bind_group: &wgpu::BindGroup,
+    (width, height, rows): (u32, u32, u32),
+) {
+    let mut pass =
+        encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None });
+    pass.set_bind_group(0, bind_group, &[]);
+    pass.set_pipeline(reduce);
+    pass.dispatch_workgroups(width.div_ceil(64), height.div_ceil(rows), 1);
+    pass.set_pipeline(finish);
+    pass.dispatch_workgroups(1, 1, 1);
+}
+
 pub fn scene_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
         array_stride: 24,
