@@ -227,6 +227,17 @@ struct MapKey {
     switches: [bool; 4],
 }
 
+/// What `prepare` gives the frame: its setup, the variant its passes run as, what the passes
+/// before Integrate read (`FrameKey`) and the shadow map's face uniforms (`ShadowMap::uniforms`,
+/// the first `face_count` of them drawn).
+struct Prepared {
+    setup: FrameSetup,
+    variant: Variant,
+    key: FrameKey,
+    faces: [FaceUniforms; 6],
+    face_count: usize,
+}
+
 /// Size-dependent targets.
 struct Targets {
     width: u32,
@@ -679,15 +690,8 @@ impl Renderer {
     }
 
     /// Everything a frame needs before its passes are recorded: resources, pipelines of the variant,
-    /// bind groups and this frame's uniforms. Returns the frame's setup, the variant its passes
-    /// run as and what the passes before Integrate read (`FrameKey`).
-    fn prepare(
-        &mut self,
-        scene: &Scene,
-        width: u32,
-        height: u32,
-        method: Method,
-    ) -> Result<(FrameSetup, Variant, FrameKey), RenderError> {
+    /// bind groups and this frame's uniforms ([`Prepared`]).
+    fn prepare(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<Prepared, RenderError> {
         self.ensure_geometry(scene)?;
         self.ensure_targets(width, height)?;
         self.ensure_grid(scene.grid)?;
@@ -714,14 +718,14 @@ impl Renderer {
             let ctx = self.ctx.clone();
             ctx.scoped("binding the passes", || self.rebind())?;
         }
-        let (faces, shadow_lookup, _) = self.passes.shadow_map.uniforms(scene);
+        let (faces, shadow_lookup, face_count) = self.passes.shadow_map.uniforms(scene);
         let (work, build) = self.frame_work(&setup, &shadow_lookup);
         setup.uniforms.work = work;
         self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
         let key = FrameKey::new(self, scene, &setup, &faces, &shadow_lookup);
-        Ok((setup, variant, key))
+        Ok(Prepared { setup, variant, key, faces, face_count })
     }
 
     /// The frame's `work` uniforms (Voxelize's list shape and the coarsest pyramid level Cull
@@ -798,7 +802,8 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<FrameInfo, RenderError> {
-        let (setup, v, key) = self.prepare(scene, width, height, method)?;
+        let Prepared { setup, variant: v, key, faces, face_count } = self.prepare(scene, width, height, method)?;
+        let fitted = self.fits_map(&setup);
         // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
         // results are still in the targets, the shadow map and the grid. Or only the map's inputs
         // are the same (the camera moved): the map is still in its texture.
@@ -809,7 +814,7 @@ impl Renderer {
         let reused = match drawn {
             Some((_, ran)) if reuse => ran,
             // (A fitted map's fit is one of its inputs, taken over with it.)
-            _ if map_reused && self.fits_map(&setup) => vec![Pass::ShadowFit, Pass::ShadowMap],
+            _ if map_reused && fitted => vec![Pass::ShadowFit, Pass::ShadowMap],
             _ if map_reused => vec![Pass::ShadowMap],
             _ => Vec::new(),
         };
@@ -829,7 +834,6 @@ impl Renderer {
         }
         let g = &geometry.gpu;
         let u = &setup.uniforms;
-        let fitted = self.fits_map(&setup);
         // The frame: an ordered list of passes.
         if !reuse {
             // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
@@ -839,6 +843,7 @@ impl Renderer {
             let ahead = 2.0 * near.max(1e-4);
             let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
             let drawing = MapDrawing {
+                matrices: &faces[..face_count],
                 faces: self.shadow_face_culling,
                 hidden: u.work.z,
                 light_facing: g.light_facing(),

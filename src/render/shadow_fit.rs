@@ -137,20 +137,23 @@ impl ShadowFit {
 /// the image's size and the medium's box (with the geometry and the culling switches, which the
 /// keys hold anyway). All zero where the map is not fitted (a point light, or the fit off): there
 /// the camera does not change the map.
-pub type FitKey = [u8; 112];
+pub type FitKey = [u8; std::mem::size_of::<FitView>()];
 
+/// The uniforms a fitted map's rectangle depends on ([`FitKey`] holds their bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FitView {
+    camera: [Vec4; 4],
+    medium: [Vec4; 2],
+    image: glam::UVec4,
+}
+
+/// The [`FitKey`] of a frame with uniforms `u` whose map is `fitted` or not.
 pub fn fit_key(fitted: bool, u: &super::FrameUniforms) -> FitKey {
-    #[repr(C)]
-    #[derive(Clone, Copy, Pod, Zeroable)]
-    struct View {
-        camera: [Vec4; 4],
-        medium: [Vec4; 2],
-        image: glam::UVec4,
-    }
     if !fitted {
-        return [0; 112];
+        return [0; std::mem::size_of::<FitView>()];
     }
-    bytemuck::cast(View {
+    bytemuck::cast(FitView {
         camera: [u.cam_right, u.cam_up, u.cam_fwd, u.eye],
         medium: [u.medium_min, u.medium_max],
         image: u.image,

@@ -77,8 +77,12 @@ struct FaceLists {
     index_count: u32,
 }
 
-/// How [`ShadowMap::record`] draws the map: what it leaves out, and the fit it draws with.
+/// How [`ShadowMap::record`] draws the map: its faces, what it leaves out, and the fit it draws
+/// with.
 pub struct MapDrawing<'a> {
+    /// The faces to draw (six for a point light, one for a sun): [`ShadowMap::uniforms`] as the
+    /// frame's `prepare` computed them (it walks every vertex; once per frame is enough).
+    pub matrices: &'a [FaceUniforms],
     /// Point light: each cube face draws only the triangles that can reach it. Sun: the map draws
     /// a list of the triangles it needs (solids' faces toward the light, and not hidden).
     pub faces: bool,
@@ -391,10 +395,9 @@ impl ShadowMap {
     ) {
         // Renderer::render_frame prepares every variant it records.
         let Some(pipelines) = self.pipelines.get(variant) else { return };
-        let face_culling = drawing.faces;
-        let (faces, _, count) = self.uniforms(scene);
+        let faces = drawing.matrices;
         let culled = match (&self.face_lists, scene.light) {
-            (Some(fl), light) if face_culling && count == if light.is_point() { 6 } else { 1 } => {
+            (Some(fl), light) if drawing.faces => {
                 let (light, pipeline) = match light {
                     Light::Point { position, .. } => (position.extend(1.0), &self.cull_pipeline),
                     Light::Directional { direction, .. } => (direction.extend(0.0), &self.sun_pipeline),
@@ -430,7 +433,7 @@ impl ShadowMap {
         // Without face lists the solids the light lies outside of draw only their faces toward
         // it, mesh runs at a time (the face lists already left the others out).
         let runs = if culled.is_none() { geometry.draw_runs(drawing.light_facing) } else { Vec::new() };
-        for (i, face) in faces.iter().enumerate().take(count) {
+        for (i, face) in faces.iter().enumerate() {
             let (uniforms, bind_group, view) = &self.faces[i];
             queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
             // A directional map fitted to the view (one face): ShadowFit's matrix replaces the
