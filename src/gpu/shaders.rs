@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 pub const EMBEDDED: &[(&str, &str)] = &[
     ("common.wgsl", include_str!("../../shaders/common.wgsl")),
     ("surface.wgsl", include_str!("../../shaders/surface.wgsl")),
+    ("surface_cull.wgsl", include_str!("../../shaders/surface_cull.wgsl")),
     ("shadow_map.wgsl", include_str!("../../shaders/shadow_map.wgsl")),
     ("shadow_cull.wgsl", include_str!("../../shaders/shadow_cull.wgsl")),
     ("shadow_pyramid.wgsl", include_str!("../../shaders/shadow_pyramid.wgsl")),

@@ -47,7 +47,7 @@ pub use shadow_map::{
     FaceUniforms, MapDrawing, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
 pub use shadow_pyramid::{MapInputs, ShadowPyramid, ShadowPyramidBindings};
-pub use surface::{Surface, SurfaceBindings, SurfaceTargets};
+pub use surface::{EyeDrawing, Surface, SurfaceBindings, SurfaceCullBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
 
@@ -346,6 +346,9 @@ pub struct Renderer {
     /// their faces toward the eye or the light (on by default; off only to compare,
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
+    /// Surface draws the triangles that cover no pixel centre as empty ones (on by default; the
+    /// targets are the same either way, off only to compare, `tests/surface_cull.rs`).
+    pub surface_culling: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
     /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
     /// on its own only to compare, `tests/occlusion.rs`). It reads the pyramid of an earlier frame
@@ -422,6 +425,7 @@ impl Renderer {
             prune: true,
             shadow_face_culling: true,
             back_face_culling: true,
+            surface_culling: true,
             occlusion_culling: true,
             fit_shadow_map: true,
             last_fitted: false,
@@ -651,7 +655,7 @@ impl Renderer {
         let Some(pyramid) = &p.shadow_pyramid.pyramid else { return };
         p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
-        p.surface.bind(d, SurfaceBindings { frame_in: frame() });
+        p.surface.bind(d, &self.frame_buffer, &geometry.gpu);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
@@ -850,7 +854,8 @@ impl Renderer {
                 fit: fitted.then_some(&p.shadow_fit),
             };
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
-            p.surface.record(&mut f.enc, v, g, targets, &eye_runs, eye_ccw);
+            let eye = EyeDrawing { runs: &eye_runs, toward_ccw: eye_ccw, cull: self.surface_culling };
+            p.surface.record(&mut f.enc, v, g, targets, eye);
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
             if !map_reused {
@@ -1010,6 +1015,14 @@ impl Renderer {
         }
         let bytes = self.ctx.read_buffer(&self.passes.shadow_fit.result)?;
         Ok(Some(bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<FitResult>()])))
+    }
+
+    /// The indices Surface drew in the last frame with [`Renderer::surface_culling`]: the scene's,
+    /// with each triangle that covers no pixel centre emptied to `(i0, i0, i0)` (`None` when no
+    /// list was made: no scene, or one too large for a storage binding), for tests.
+    pub fn read_eye_list(&self) -> Result<Option<Vec<u32>>, GpuError> {
+        let Some(list) = self.passes.surface.eye_list() else { return Ok(None) };
+        Ok(Some(bytemuck::cast_slice(&self.ctx.read_buffer(list)?).to_vec()))
     }
 
     /// Voxelize's work items per thread and 32-bit words of bins per item (each at least 1; the
@@ -1193,6 +1206,7 @@ mod binding_tests {
         check("shadow_map.wgsl", ShadowMapBindings::SLOTS);
         check("shadow_cull.wgsl", ShadowCullBindings::SLOTS);
         check("surface.wgsl", SurfaceBindings::SLOTS);
+        check("surface_cull.wgsl", SurfaceCullBindings::SLOTS);
         check("ranges.wgsl", RangesBindings::SLOTS);
         check("shadow_fit.wgsl", ShadowFitBindings::SLOTS);
         check("shadow_pyramid.wgsl", ShadowPyramidBindings::SLOTS);
@@ -1212,10 +1226,11 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 13] = [
+        let passes: [(&str, &[(&str, Kind)]); 14] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
+            ("surface_cull.wgsl", SurfaceCullBindings::SLOTS),
             ("ranges.wgsl", RangesBindings::SLOTS),
             ("shadow_pyramid.wgsl", ShadowPyramidBindings::SLOTS),
             ("cull.wgsl", CullBindings::SLOTS),

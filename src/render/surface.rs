@@ -8,15 +8,51 @@
 //!
 //! The solids the eye lies outside of draw only their faces toward it (`crate::scene::solid`):
 //! the scene is drawn as runs of consecutive meshes that cull the same faces.
+//!
+//! Before drawing, a compute pass (`shaders/surface_cull.wgsl`) empties the triangles whose
+//! bounding box in pixels holds no pixel centre: they would draw nothing. The draw list keeps every
+//! triangle in its place, so the targets are the same, bit for bit; on a million-triangle scene
+//! most triangles are such, and llvmpipe's vertex work, which runs on one thread, shrinks with them.
 
 use super::scene_gpu::{Facing, SceneGpu};
-use super::util::{bindings, cull_mode, scene_vertex_layout, Kind};
+use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, Kind};
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Surface's bind group (surface.wgsl).
     SurfaceBindings { frame_in: Kind::Storage }
+}
+
+bindings! {
+    /// The culling's bind group (surface_cull.wgsl).
+    SurfaceCullBindings {
+        frame_in: Kind::Storage,
+        vertices: Kind::Storage,
+        indices: Kind::Storage,
+        lists: Kind::StorageRw,
+    }
+}
+
+/// How [`Surface::record`] draws the scene.
+pub struct EyeDrawing<'a> {
+    /// Runs of consecutive meshes that keep the same faces ([`SceneGpu::draw_runs`]).
+    pub runs: &'a [(std::ops::Range<u32>, Facing)],
+    /// Whether faces toward the eye come out counter-clockwise ([`super::util::toward_is_ccw`]).
+    pub toward_ccw: bool,
+    /// Empty the triangles that cover no pixel centre first ([`super::Renderer::surface_culling`]).
+    pub cull: bool,
+}
+
+/// The eye's draw list for one scene's geometry (surface_cull.wgsl).
+struct EyeList {
+    /// The scene index buffer and the frame parameters it was made from (remade when they change).
+    source: wgpu::Buffer,
+    frame: wgpu::Buffer,
+    /// The scene's indices with the triangles that cover no pixel centre emptied.
+    lists: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    triangles: u32,
 }
 
 /// The pass's render targets, `width x height`.
@@ -33,6 +69,11 @@ pub struct Surface {
     pipelines: VariantPipelines<Vec<wgpu::RenderPipeline>>,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
+    cull_layout: wgpu::BindGroupLayout,
+    cull_pipeline: wgpu::ComputePipeline,
+    /// `None` until bound, or when the list would not fit a storage binding (then every triangle
+    /// is drawn as it is).
+    eye_list: Option<EyeList>,
 }
 
 impl Surface {
@@ -52,18 +93,56 @@ impl Surface {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let cull_module = lib.module(device, "surface_cull.wgsl")?;
+        let cull_layout = SurfaceCullBindings::layout(device, "Surface::cull_layout", wgpu::ShaderStages::COMPUTE);
+        let cull_pipeline = compute_pipeline(device, "Surface::cull_pipeline", &cull_module, "main", &cull_layout);
         Ok(Surface {
             module,
             pipeline_layout: pl,
             pipelines: VariantPipelines::new(Specialised::Light),
             layout,
             bind_group: None,
+            cull_layout,
+            cull_pipeline,
+            eye_list: None,
         })
     }
 
-    /// (Re)binds the inputs; called when the resources change.
-    pub fn bind(&mut self, device: &wgpu::Device, b: SurfaceBindings) {
+    /// (Re)binds the inputs; called when the resources change. The eye's draw list is remade
+    /// only for another scene (or frame buffer).
+    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &SceneGpu) {
+        let b = SurfaceBindings { frame_in: frame.as_entire_binding() };
         self.bind_group = Some(b.bind(device, "Surface::bind_group", &self.layout));
+        if self.eye_list.as_ref().is_some_and(|l| l.source == geometry.indices && l.frame == *frame) {
+            return;
+        }
+        self.eye_list = None;
+        let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        let bytes = geometry.index_count as u64 * 4;
+        if geometry.index_count == 0 || bytes > limit || geometry.vertices.size() > limit {
+            return;
+        }
+        let lists = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Surface::eye_list"),
+            size: bytes,
+            // COPY_SRC: Renderer::read_eye_list, for tests.
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = SurfaceCullBindings {
+            frame_in: frame.as_entire_binding(),
+            vertices: geometry.vertices.as_entire_binding(),
+            indices: geometry.indices.as_entire_binding(),
+            lists: lists.as_entire_binding(),
+        }
+        .bind(device, "Surface::cull_bind_group", &self.cull_layout);
+        self.eye_list = Some(EyeList {
+            source: geometry.indices.clone(),
+            frame: frame.clone(),
+            lists,
+            bind_group,
+            triangles: geometry.index_count / 3,
+        });
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
@@ -108,11 +187,24 @@ impl Surface {
         variant: Variant,
         geometry: &SceneGpu,
         targets: SurfaceTargets,
-        runs: &[(std::ops::Range<u32>, Facing)],
-        toward_ccw: bool,
+        drawing: EyeDrawing,
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
+        let EyeDrawing { runs, toward_ccw, cull } = drawing;
+        let list = self.eye_list.as_ref().filter(|_| cull);
+        if let Some(list) = list {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("Surface::cull_pass"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.cull_pipeline);
+            pass.set_bind_group(0, &list.bind_group, &[]);
+            // 64 triangles a workgroup, spread over y past the 65 535 limit on x.
+            let groups = list.triangles.div_ceil(64).max(1);
+            let x = groups.min(65_535);
+            pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+        }
         let SurfaceTargets { material, distance, depth } = targets;
         let color = |view, clear: f64| {
             Some(wgpu::RenderPassColorAttachment {
@@ -140,11 +232,18 @@ impl Surface {
         });
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-        pass.set_index_buffer(geometry.indices.slice(..), wgpu::IndexFormat::Uint32);
+        let indices = list.map_or(&geometry.indices, |l| &l.lists);
+        pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
         for (range, facing) in runs {
             pass.set_pipeline(&pipelines[cull_mode(*facing, toward_ccw).0]);
             pass.draw_indexed(range.clone(), 0, 0..1);
         }
+    }
+
+    /// The indices the last culled frame drew ([`Surface::record`] with `cull`; `None` without a
+    /// list), for tests.
+    pub fn eye_list(&self) -> Option<&wgpu::Buffer> {
+        self.eye_list.as_ref().map(|l| &l.lists)
     }
 
     /// An empty pass over the surface targets (loaded and stored, nothing drawn), recorded after
