@@ -1,5 +1,5 @@
-// surface_cull.wgsl: the eye's triangles that cover no pixel centre, made empty before Surface
-// draws (the Surface pass, `src/render/surface.rs`).
+// surface_cull.wgsl: the eye's triangles that would draw nothing, made empty before Surface draws
+// (the Surface pass, `src/render/surface.rs`).
 //
 // The rasterizer writes a pixel only where a triangle covers the pixel's centre (i + 1/2, j + 1/2).
 // A triangle in front of the eye (w > 0 at its three vertices; the part the near plane leaves is
@@ -9,8 +9,14 @@
 //
 // no centre lies in the box and the triangle draws nothing. eps = 1/64 pixel covers the rounding:
 // the rasterizer snaps vertices to 1/256 of a pixel, and this projection rounds apart from the
-// vertex shader's by far less. Such a triangle is listed as (i0, i0, i0): zero area, which the
-// rasterizer drops before setting it up, and which costs one vertex instead of three. Every other
+// vertex shader's by far less. Nor does a solid's face turned away from the eye where Surface's
+// pipeline culls that side (`sides`, per mesh: its winding normal n against the way to the eye,
+//
+//   side * n . (eye - p0) < -t |n| |eye - p0|,   t = FACING_TOL = 1e-3,
+//
+// so clearly turned away that the rasterizer's own test on snapped vertices cannot see it the
+// other way round). Such a triangle is listed as (i0, i0, i0): zero area, which the rasterizer
+// drops before setting it up, and which costs one vertex instead of three. Every other
 // triangle is copied as it is, in its place: the runs draw the same ranges in the same order, so
 // the targets are the same, bit for bit. Scenes of tessellated or scanned meshes hold mostly such
 // triangles (a million-triangle scene at 512x512: several per pixel), and on llvmpipe the vertex
@@ -24,15 +30,35 @@
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 // The indices Surface draws: `indices` with the triangles that cover no centre emptied.
 @group(0) @binding(3) var<storage, read_write> lists: array<u32>;
+// Per triangle: its mesh.
+@group(0) @binding(4) var<storage, read> triangle_meshes: array<u32>;
+// Per mesh: +1 Surface draws only the faces whose winding normal (b - a) x (c - a) faces the eye,
+// -1 only those facing away, 0 all (SceneGpu::eye_sides, the pipelines' cull modes).
+@group(0) @binding(5) var<storage, read> sides: array<f32>;
 
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
 // How far past the bounding box a pixel centre may be and still count, in pixels.
 const EPS: f32 = 0.015625;
+// How clearly a face must turn away from the eye to be emptied (the sine of its angle to the way
+// toward the eye).
+const FACING_TOL: f32 = 1e-3;
 
-fn clip_of(i: u32) -> vec4f {
-    return f.view_proj * vec4f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u], 1.0);
+fn position(i: u32) -> vec3f {
+    return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
+}
+
+// Whether the triangle is a face Surface's pipeline culls: turned away from the eye on the side
+// its mesh skips.
+fn turned_away(t: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
+    let n = cross(p1 - p0, p2 - p0);
+    let to_eye = f.eye.xyz - p0;
+    return sides[triangle_meshes[t]] * dot(n, to_eye) < -FACING_TOL * length(n) * length(to_eye);
+}
+
+fn clip_of(p: vec3f) -> vec4f {
+    return f.view_proj * vec4f(p, 1.0);
 }
 
 // Pixel coordinates (x right, y down) of a clip-space point with w > 0.
@@ -55,11 +81,14 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     let i0 = indices[3u * t];
     let i1 = indices[3u * t + 1u];
     let i2 = indices[3u * t + 2u];
-    let a = clip_of(i0);
-    let b = clip_of(i1);
-    let c = clip_of(i2);
-    var empty = false;
-    if (min(a.w, min(b.w, c.w)) > 0.0) {
+    let p0 = position(i0);
+    let p1 = position(i1);
+    let p2 = position(i2);
+    let a = clip_of(p0);
+    let b = clip_of(p1);
+    let c = clip_of(p2);
+    var empty = turned_away(t, p0, p1, p2);
+    if (!empty && min(a.w, min(b.w, c.w)) > 0.0) {
         let pa = pixel_of(a);
         let pb = pixel_of(b);
         let pc = pixel_of(c);

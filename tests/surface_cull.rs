@@ -1,5 +1,6 @@
 //! Surface's culling (`shaders/surface_cull.wgsl`) empties the triangles whose bounding box holds no
-//! pixel centre before the rasterizer sees them. They would have drawn nothing, so every target,
+//! pixel centre, and the solids' faces clearly turned away from the eye, before the rasterizer
+//! sees them. They would have drawn nothing, so every target,
 //! and with them the final image and the scattered light, must be the same as when every triangle
 //! is drawn: bit for bit, for a finely tessellated scene (most triangles emptied), at image sizes
 //! whose edges cut triangles, and with triangles across the near plane and behind the eye.
@@ -39,7 +40,8 @@ fn same_with_and_without(r: &mut Renderer, scene: &Scene, (w, h): (u32, u32), me
 
 /// A room of 64 spheres tessellated to 100 000 triangles, under its point light and under a sun,
 /// at two small sizes (one odd, whose last column and row cut triangles): most triangles lie
-/// between pixel centres and are emptied, the rest draw the same image.
+/// between pixel centres or on the spheres' far sides (closed solids seen from outside) and are
+/// emptied, the rest draw the same image.
 #[test]
 fn a_finely_tessellated_room_draws_the_same_with_its_tiny_triangles_emptied() {
     let Some(mut r) = renderer() else { return };

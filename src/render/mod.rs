@@ -822,8 +822,15 @@ impl Renderer {
             _ if map_reused => vec![Pass::ShadowMap],
             _ => Vec::new(),
         };
+        // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
+        let u = &setup.uniforms;
+        let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
+        let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
+        let mut eye_facing = Vec::new();
         if let Some(g) = self.geometry.as_mut() {
             g.gpu.update_light_facing(&self.ctx.queue, &scene.light, self.back_face_culling);
+            eye_facing = g.gpu.eye_facing(eye, near_corner, self.back_face_culling);
+            g.gpu.update_eye_sides(&self.ctx.queue, &eye_facing);
         }
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
@@ -837,13 +844,9 @@ impl Renderer {
             t.begin(&mut f.enc);
         }
         let g = &geometry.gpu;
-        let u = &setup.uniforms;
         // The frame: an ordered list of passes.
         if !reuse {
-            // Solids seen from outside are drawn and voxelized by their faces toward the viewpoint.
-            let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
-            let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
-            let eye_runs = g.draw_runs(&g.eye_facing(eye, near_corner, self.back_face_culling));
+            let eye_runs = g.draw_runs(&eye_facing);
             let ahead = 2.0 * near.max(1e-4);
             let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
             let drawing = MapDrawing {

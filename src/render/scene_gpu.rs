@@ -64,6 +64,9 @@ pub struct SceneGpu {
     pub light_sides: wgpu::Buffer,
     /// What [`SceneGpu::light_sides`] holds (`None` until first written).
     light_facing: Option<Vec<Facing>>,
+    /// The same for the eye, written by [`SceneGpu::update_eye_sides`] (Surface's culling).
+    pub eye_sides: wgpu::Buffer,
+    eye_facing: Option<Vec<Facing>>,
 }
 
 impl SceneGpu {
@@ -145,12 +148,16 @@ impl SceneGpu {
             contents: bytemuck::cast_slice(&triangle_meshes),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let light_sides = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("SceneGpu::light_sides"),
-            size: 4 * meshes.len().max(1) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let sides = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 4 * meshes.len().max(1) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let light_sides = sides("SceneGpu::light_sides");
+        let eye_sides = sides("SceneGpu::eye_sides");
         SceneGpu {
             vertices: vb,
             indices: ib,
@@ -162,6 +169,8 @@ impl SceneGpu {
             triangle_meshes,
             light_sides,
             light_facing: None,
+            eye_sides,
+            eye_facing: None,
         }
     }
 
@@ -177,24 +186,14 @@ impl SceneGpu {
             Light::Directional { .. } => true,
         };
         let of = |m: &MeshRange| if enabled { Facing::of(m.closure, outside(&m.bounds)) } else { Facing::Both };
-        // Compared in place: an unchanged frame allocates nothing either.
-        let unchanged =
-            self.light_facing.as_ref().is_some_and(|old| old.iter().copied().eq(self.meshes.iter().map(of)));
-        if !unchanged {
-            let facing: Vec<Facing> = self.meshes.iter().map(of).collect();
-            let sides: Vec<f32> = facing
-                .iter()
-                .map(|f| match f {
-                    Facing::Both => 0.0,
-                    Facing::Toward => 1.0,
-                    Facing::Away => -1.0,
-                })
-                .collect();
-            if !sides.is_empty() {
-                queue.write_buffer(&self.light_sides, 0, bytemuck::cast_slice(&sides));
-            }
-            self.light_facing = Some(facing);
-        }
+        let facing = self.meshes.iter().map(of);
+        write_sides(queue, &self.light_sides, &mut self.light_facing, facing);
+    }
+
+    /// Writes [`SceneGpu::eye_sides`] from the eye's facing per mesh ([`SceneGpu::eye_facing`]),
+    /// only when it changed since the last frame.
+    pub fn update_eye_sides(&mut self, queue: &wgpu::Queue, facing: &[Facing]) {
+        write_sides(queue, &self.eye_sides, &mut self.eye_facing, facing.iter().copied());
     }
 
     /// Per mesh, the faces the light can see first, as [`SceneGpu::update_light_facing`] last set
@@ -223,6 +222,33 @@ impl SceneGpu {
             })
             .collect()
     }
+}
+
+/// Writes per-mesh sides (`+1` keep the faces whose winding normal faces the viewpoint, `-1` those
+/// facing away, `0` all, as f32) into `buffer` unless `written` already holds `facing`: an
+/// unchanged frame uploads nothing, and compares in place, allocating nothing either.
+fn write_sides(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    written: &mut Option<Vec<Facing>>,
+    facing: impl Iterator<Item = Facing> + Clone,
+) {
+    if written.as_ref().is_some_and(|old| old.iter().copied().eq(facing.clone())) {
+        return;
+    }
+    let facing: Vec<Facing> = facing.collect();
+    let sides: Vec<f32> = facing
+        .iter()
+        .map(|f| match f {
+            Facing::Both => 0.0,
+            Facing::Toward => 1.0,
+            Facing::Away => -1.0,
+        })
+        .collect();
+    if !sides.is_empty() {
+        queue.write_buffer(buffer, 0, bytemuck::cast_slice(&sides));
+    }
+    *written = Some(facing);
 }
 
 /// The index ranges that draw `meshes`, each with the faces it keeps (`facing`, per mesh):

@@ -10,9 +10,11 @@
 //! the scene is drawn as runs of consecutive meshes that cull the same faces.
 //!
 //! Before drawing, a compute pass (`shaders/surface_cull.wgsl`) empties the triangles whose
-//! bounding box in pixels holds no pixel centre: they would draw nothing. The draw list keeps every
-//! triangle in its place, so the targets are the same, bit for bit; on a million-triangle scene
-//! most triangles are such, and llvmpipe's vertex work, which runs on one thread, shrinks with them.
+//! bounding box in pixels holds no pixel centre, and the solids' faces turned away from the eye
+//! (which the pipeline's cull mode would drop after their vertex work): they would draw nothing.
+//! The draw list keeps every triangle in its place, so the targets are the same, bit for bit; on
+//! a million-triangle scene most triangles are such, and llvmpipe's vertex work, which runs on
+//! one thread, shrinks with them.
 
 use super::scene_gpu::{Facing, SceneGpu};
 use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, Kind};
@@ -31,6 +33,8 @@ bindings! {
         vertices: Kind::Storage,
         indices: Kind::Storage,
         lists: Kind::StorageRw,
+        triangle_meshes: Kind::Storage,
+        sides: Kind::Storage,
     }
 }
 
@@ -134,6 +138,8 @@ impl Surface {
             vertices: geometry.vertices.as_entire_binding(),
             indices: geometry.indices.as_entire_binding(),
             lists: lists.as_entire_binding(),
+            triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
+            sides: geometry.eye_sides.as_entire_binding(),
         }
         .bind(device, "Surface::cull_bind_group", &self.cull_layout);
         self.eye_list = Some(EyeList {
