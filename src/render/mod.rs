@@ -346,8 +346,9 @@ pub struct Renderer {
     /// their faces toward the eye or the light (on by default; off only to compare,
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
-    /// Surface draws the triangles that cover no pixel centre as empty ones (on by default; the
-    /// targets are the same either way, off only to compare, `tests/surface_cull.rs`).
+    /// Surface draws the triangles that would draw nothing (they cover no pixel centre, or they
+    /// are solids' faces turned away from the eye) as empty ones, skipping their vertex work (on by
+    /// default; the targets are the same either way, off only to compare, `tests/surface_cull.rs`).
     pub surface_culling: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
     /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
@@ -1021,8 +1022,9 @@ impl Renderer {
     }
 
     /// The indices Surface drew in the last frame with [`Renderer::surface_culling`]: the scene's,
-    /// with each triangle that covers no pixel centre emptied to `(i0, i0, i0)` (`None` when no
-    /// list was made: no scene, or one too large for a storage binding), for tests.
+    /// with each triangle that would draw nothing (it covers no pixel centre, or it is a solid's
+    /// face the pipeline culls) emptied to `(i0, i0, i0)` (`None` when no list was made: no scene,
+    /// or one too large for a storage binding), for tests.
     pub fn read_eye_list(&self) -> Result<Option<Vec<u32>>, GpuError> {
         let Some(list) = self.passes.surface.eye_list() else { return Ok(None) };
         Ok(Some(bytemuck::cast_slice(&self.ctx.read_buffer(list)?).to_vec()))

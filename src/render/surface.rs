@@ -44,7 +44,7 @@ pub struct EyeDrawing<'a> {
     pub runs: &'a [(std::ops::Range<u32>, Facing)],
     /// Whether faces toward the eye come out counter-clockwise ([`super::util::toward_is_ccw`]).
     pub toward_ccw: bool,
-    /// Empty the triangles that cover no pixel centre first ([`super::Renderer::surface_culling`]).
+    /// Empty the triangles that would draw nothing first ([`super::Renderer::surface_culling`]).
     pub cull: bool,
 }
 
@@ -53,7 +53,7 @@ struct EyeList {
     /// The scene index buffer and the frame parameters it was made from (remade when they change).
     source: wgpu::Buffer,
     frame: wgpu::Buffer,
-    /// The scene's indices with the triangles that cover no pixel centre emptied.
+    /// The scene's indices with the triangles that would draw nothing emptied.
     lists: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     triangles: u32,
