@@ -80,3 +80,42 @@ fn triangles_behind_the_eye_and_across_the_near_plane_draw_the_same() {
     let (emptied, triangles) = same_with_and_without(&mut r, &scene, (96, 80), Method::Vsv);
     assert!(emptied > 0 && emptied < triangles, "{emptied} of {triangles} emptied");
 }
+
+/// A triangle with two vertices behind the eye: each projects (x/w, y/w with w < 0) onto the
+/// point its mirror image through the eye would, here within a fifth of a pixel of the front
+/// vertex's, in a box between pixel centres. Its real image is a wedge from the front vertex out
+/// to the image's edge, over many centres; only the test that all three vertices lie in front of
+/// the eye keeps it from being emptied.
+#[test]
+fn a_triangle_through_the_eye_plane_is_kept_though_its_vertices_project_between_centres() {
+    let Some(mut r) = renderer() else { return };
+    let mut scene = common::occluder_scene(point_light(Vec3::new(0.3, 3.0, 0.2)));
+    let (w, h) = (96u32, 80u32);
+    let cam = scene.camera;
+    let inverse = cam.view_proj(w as f32 / h as f32).inverse();
+    // The view direction through pixel coordinates (x right, y down).
+    let through = |x: f32, y: f32| {
+        let ndc = Vec3::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0, 0.5);
+        (inverse.project_point3(ndc) - cam.eye).normalize()
+    };
+    // Centres lie at i + 1/2: the box [39.85, 40.1] x [30, 30.2] holds none. The two edges toward
+    // the eye leave the front vertex (40, 30) upward, one to each side.
+    let front = cam.eye + through(40.0, 30.0) * 2.0;
+    let behind_a = cam.eye - through(40.1, 30.2) * 2.0;
+    let behind_b = cam.eye - through(39.85, 30.1) * 2.0;
+    scene.name = "a triangle through the eye plane".into();
+    scene.meshes.push(epivox::scene::Mesh {
+        name: "through the eye plane".into(),
+        positions: vec![front, behind_a, behind_b],
+        triangles: vec![[0, 1, 2]],
+        albedo: Vec3::splat(0.8),
+    });
+    same_with_and_without(&mut r, &scene, (w, h), Method::Vsv);
+    // The comparison means something only if the triangle shows.
+    r.surface_culling = false;
+    let with = r.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    scene.meshes.pop();
+    let without = r.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let differ = with.hdr.pixels.iter().zip(&without.hdr.pixels).filter(|(a, b)| a != b).count();
+    assert!(differ > 50, "the triangle covers only {differ} pixels");
+}
