@@ -2,8 +2,7 @@
 # Runs every test of epivox on a fresh Debian/Ubuntu machine.
 #
 # 1. Installs, only when missing, what the tests need: the Mesa software Vulkan driver
-#    (lavapipe, so the GPU tests run without a GPU), Xvfb (a virtual X display) and the DejaVu
-#    fonts (the benchmark plots' text).
+#    (lavapipe, so the GPU tests run without a GPU) and Xvfb (a virtual X display).
 # 2. Starts Xvfb (when DISPLAY is unset) for the editor window test.
 # 3. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset.
 #
@@ -15,8 +14,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 say() { printf '\n==> %s\n' "$*"; }
 
 # ---------------------------------------------------------------- system packages
-# fonts-dejavu-core: the text of `epivox bench`'s plots (without it they are drawn text-free).
-packages=(mesa-vulkan-drivers libvulkan1 xvfb xauth fonts-dejavu-core)
+packages=(mesa-vulkan-drivers libvulkan1 xvfb xauth)
 
 say "Checking system packages: ${packages[*]}"
 if ! command -v dpkg >/dev/null 2>&1; then

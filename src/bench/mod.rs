@@ -20,7 +20,6 @@ mod procedural;
 mod report;
 
 pub use cache::{cached_reference, reference_key, CacheStatus, CachedReference, KeyHasher};
-pub use plot::{has_text as plots_have_text, FONT_CANDIDATES};
 pub use procedural::procedural_scene;
 
 use crate::gpu::GpuError;
@@ -851,12 +850,6 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         files: Vec::new(),
         seconds: 0.0,
     };
-    if !plot::has_text() {
-        results.notes.push(format!(
-            "no font found ({}, or set EPIVOX_FONT): the plots have no text; the tables below label them",
-            FONT_CANDIDATES[0]
-        ));
-    }
     results.files = report::write_all(&results, out)?;
     results.files.extend(write_scatter_images(&reference.scatter, &best, out)?);
     results.seconds = started.elapsed().as_secs_f64();

@@ -1,46 +1,23 @@
 //! Log-log line plots as PNG (plotters' bitmap backend, written with the `image` crate).
 //!
-//! Text needs a font file: the first of [`FONT_CANDIDATES`] (or `$EPIVOX_FONT`) that exists is read
-//! once and registered with plotters' `ab_glyph` backend. Without one the plots are drawn without any
-//! text (axes, ticks and curves only) and the report's tables carry the labels; a warning says so.
+//! Text is drawn with the sans-serif font the editor already carries (egui's Ubuntu Light, from
+//! `epaint_default_fonts`), registered once with plotters' `ab_glyph` backend: the plots look the
+//! same on every machine, also on one without any font installed (a GPU server, a container).
 
 use super::BenchError;
 use plotters::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 
-/// Fonts looked for, in order (Debian/Ubuntu `fonts-dejavu-core`, Fedora, Arch, Liberation).
-pub const FONT_CANDIDATES: &[&str] = &[
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-];
-
-/// The font registered as "sans-serif", if one was found.
-fn font() -> Option<&'static Path> {
-    static FONT: OnceLock<Option<PathBuf>> = OnceLock::new();
-    FONT.get_or_init(|| {
-        let env = std::env::var_os("EPIVOX_FONT").map(PathBuf::from);
-        let candidates = env.into_iter().chain(FONT_CANDIDATES.iter().map(PathBuf::from));
-        for path in candidates {
-            if let Ok(bytes) = std::fs::read(&path) {
-                // plotters keeps fonts for the life of the process: leak this one copy.
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
-                    return Some(path);
-                }
-            }
-        }
-        None
-    })
-    .as_deref()
-}
-
-/// Whether the plots carry text (a font was found).
-pub fn has_text() -> bool {
-    font().is_some()
+/// Registers the embedded font as plotters' "sans-serif" (once per process); the error, if any.
+fn register_font() -> Result<(), String> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT)
+                .map_err(|_| "the embedded font (Ubuntu Light) is not a valid font file".to_string())
+        })
+        .clone()
 }
 
 /// One curve.
@@ -159,7 +136,7 @@ fn legend_corner(series: &[Series], xr: &std::ops::Range<f64>, yr: &std::ops::Ra
 /// Draws `plot` as a `width x height` PNG at `path`.
 pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), BenchError> {
     let err = |e: String| BenchError::Plot { path: path.to_path_buf(), message: e };
-    let text = has_text();
+    register_font().map_err(err)?;
     let mut buf = vec![255u8; width as usize * height as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
@@ -169,29 +146,21 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
         let yr = log_range(all().map(|p| p.1));
         let mut builder = ChartBuilder::on(&root);
         builder.margin(16);
-        if text {
-            builder.caption(plot.title, ("sans-serif", 22)).x_label_area_size(48).y_label_area_size(72);
-        } else {
-            builder.x_label_area_size(8).y_label_area_size(8);
-        }
+        builder.caption(plot.title, ("sans-serif", 22)).x_label_area_size(48).y_label_area_size(72);
         let ((xt, xl), (yt, yl)) = (log_ticks(&xr), log_ticks(&yr));
         let x_axis = xr.clone().log_scale().with_key_points(xt).with_light_points(xl);
         let y_axis = yr.clone().log_scale().with_key_points(yt).with_light_points(yl);
         let mut chart = builder.build_cartesian_2d(x_axis, y_axis).map_err(|e| err(e.to_string()))?;
         let mut mesh = chart.configure_mesh();
         mesh.light_line_style(RGBColor(242, 242, 242));
-        if text {
-            mesh.x_labels(8)
-                .y_labels(10)
-                .x_desc(plot.x_desc)
-                .y_desc(plot.y_desc)
-                .label_style(("sans-serif", 14))
-                .axis_desc_style(("sans-serif", 16))
-                .x_label_formatter(&|v| short(*v))
-                .y_label_formatter(&|v| short(*v));
-        } else {
-            mesh.x_labels(0).y_labels(0);
-        }
+        mesh.x_labels(8)
+            .y_labels(10)
+            .x_desc(plot.x_desc)
+            .y_desc(plot.y_desc)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .x_label_formatter(&|v| short(*v))
+            .y_label_formatter(&|v| short(*v));
         mesh.draw().map_err(|e| err(e.to_string()))?;
 
         for s in &plot.series {
@@ -208,11 +177,9 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
             let series =
                 chart.draw_series(LineSeries::new(line, color.stroke_width(2))).map_err(|e| err(e.to_string()))?;
-            if text {
-                series
-                    .label(s.name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-            }
+            series
+                .label(s.name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
             // Front points filled, the others hollow.
             chart
                 .draw_series(pts.iter().map(|(i, p)| {
@@ -221,16 +188,14 @@ pub fn draw(plot: &Plot, path: &Path, width: u32, height: u32) -> Result<(), Ben
                 }))
                 .map_err(|e| err(e.to_string()))?;
         }
-        if text {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .position(legend_corner(&plot.series, &xr, &yr))
-                .draw()
-                .map_err(|e| err(e.to_string()))?;
-        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(legend_corner(&plot.series, &xr, &yr))
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     let img =
@@ -276,5 +241,22 @@ mod tests {
         assert!(light.len() > t.len());
         let (t, _) = log_ticks(&(0.5..2.0e5));
         assert!(close(&t, &[1.0, 10.0, 100.0, 1e3, 1e4, 1e5]), "{t:?}");
+    }
+
+    /// The title is drawn with the embedded font: dark pixels above the chart, on any machine (the
+    /// H200 server had no font installed, and the system-font lookup failed the whole bench there).
+    #[test]
+    fn plots_carry_their_title_without_system_fonts() {
+        let dir = std::env::temp_dir().join(format!("epivox-plot-{}", std::process::id()));
+        let path = dir.join("plot.png");
+        let series =
+            vec![Series { name: "vsv".into(), color: COLORS[0], points: vec![(1.0, 0.1), (10.0, 0.01)], front: None }];
+        draw(&Plot { title: "Error against time", x_desc: "ms", y_desc: "error", series }, &path, 400, 300)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let img = image::open(&path).unwrap_or_else(|e| panic!("{e}")).to_rgb8();
+        // The caption's band: the margin (16 px) down to the chart's top.
+        let dark = (16..40).flat_map(|y| (0..400).map(move |x| (x, y))).filter(|&(x, y)| img.get_pixel(x, y)[0] < 128);
+        assert!(dark.count() > 50, "no title text drawn");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

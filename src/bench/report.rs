@@ -182,6 +182,9 @@ pub fn write_all(r: &BenchResults, dir: &Path) -> Result<Vec<PathBuf>, BenchErro
         write(&p, &scaling_csv(&r.resolution_rows))?;
         files.push(p);
     }
+    // The tables before the plots: a plot that cannot be drawn must not cost the numbers.
+    write_markdown(r, dir)?;
+    files.push(md);
 
     let series = methods(&r.rows)
         .iter()
@@ -230,8 +233,6 @@ pub fn write_all(r: &BenchResults, dir: &Path) -> Result<Vec<PathBuf>, BenchErro
         )?;
         files.push(res_png);
     }
-    write_markdown(r, dir)?;
-    files.push(md);
     Ok(files)
 }
 
