@@ -21,7 +21,8 @@
 //   inside it); the remainder [t_b, inf) is mapped to a finite range with the reference's variable
 //   alpha = atan((t - t_c) / H) (t_c: closest approach to the light, H = sqrt(h^2 + r^2), so that
 //   dt / (d^2 + r^2) = dalpha / H, alpha(inf) = pi / 2) and sampled with max(steps / 4, 4) more steps
-//   of the same kind (one shadow lookup each: shadows of casters can run on past the box). A plain
+//   of the same kind (one shadow lookup each: shadows of casters can run on past the box), placed by
+//   their distance b = pi/2 - alpha from the end, t = t_c + H / tan(b), so that none lands on pi/2. A plain
 //   march to a fixed far distance would drop that tail (up to half of a sky ray's light when the light
 //   is near the box's side) and never converge to the reference.
 
@@ -118,12 +119,16 @@ fn march_point(v: vec3f, t_s: f32, u: f32) -> vec3f {
         let t_c = dot(el, v);
         let h = length(cross(el, v));
         let big_h = max(sqrt(h * h + r * r), 1e-6 * max(length(el), 1e-20));
-        let a0 = atan((t_b - t_c) / big_h);
+        // pi/2 - alpha(t_b), without the cancellation of pi/2 - atan(..) when t_b is far past t_c.
+        let a_left = atan2(big_h, t_b - t_c);
         let m = max(n / 4u, 4u);
-        let da = (0.5 * PI - a0) / f32(m);
+        let da = a_left / f32(m);
         for (var j = 0u; j < m; j++) {
-            let a = a0 + (f32(j) + u) * da;
-            let t = t_c + big_h * tan(a);
+            // alpha = pi/2 - b, t = t_c + H / tan(b), b > 0 measured from pi/2: with a jittered u
+            // near 1, a0 + (j + u) da rounds to f32(pi/2) itself, whose tan is -2.3e7 (a sample
+            // far behind the eye) or, with a GPU's fast tan, infinite (the H200 gave infinite pixels).
+            let b = (f32(m - j) - u) * da;
+            let t = t_c + big_h / tan(b);
             sum += point_term(v, t) * (da / big_h);
         }
     }

@@ -94,6 +94,55 @@ fn sky_tail_of_a_point_light_adds_up() {
     assert_converges(&e, 0.002);
 }
 
+/// raymarch.wgsl's `pixel_hash`, the jitter offset u of pixel (x, y), as its integer numerator over
+/// 2^24 (u = k / 2^24).
+fn jitter_numerator(x: u32, y: u32) -> u32 {
+    let mut s = x.wrapping_mul(747796405).wrapping_add(y.wrapping_mul(2891336453)).wrapping_add(12345);
+    s = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277803737);
+    s = (s >> 22) ^ s;
+    s >> 8
+}
+
+/// The sky tail's last jittered sample sits at alpha = a0 + (m - 1 + u) da. With u within a few
+/// hundred ulps of 1 that rounds to f32(pi/2), whose tangent put the sample 2.3e7 H behind the eye
+/// (on an NVIDIA H200 the bunny's jittered march had infinite pixels, presumably its fast tan).
+/// Behind the eye a forward-scattering phase (g = 0.9) sees the light straight ahead, so that one
+/// sample outweighs the rest of the tail by orders of magnitude. At the pixels whose u is that close
+/// to 1, the jittered march must agree with the midpoint rule as closely as elsewhere: both integrate
+/// the same smooth sky ray with 1024 + 256 samples (5%: the pixels' own jitter error is far below it;
+/// the misplaced sample made them several times too bright).
+#[test]
+fn jittered_sky_tail_samples_stay_on_the_ray() {
+    let Some(mut r) = renderer() else { return };
+    let mut scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
+    scene.camera.target = Vec3::new(0.0, 6.0, -3.0);
+    scene.medium.phase = epivox::params::Phase::HenyeyGreenstein { g: 0.9 };
+    // The smallest image holding pixels with u > 1 - 2^-16 (pixel (165, 106): u = 1 - 27 / 2^24).
+    let (w, h) = (166, 107);
+    let near_one: Vec<(u32, u32)> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| jitter_numerator(x, y) >= (1 << 24) - 256)
+        .collect();
+    assert!(!near_one.is_empty(), "no pixel with u near 1: the hash above no longer mirrors the shader's");
+    let steps = 1024;
+    let jittered = r.render(&scene, w, h, Method::Raymarch { steps, jitter: true }).unwrap();
+    let midpoint = r.render(&scene, w, h, Method::Raymarch { steps, jitter: false }).unwrap();
+    assert_eq!(jittered.scatter.count_non_finite(), 0);
+    for &(x, y) in &near_one {
+        let i = (y * w + x) as usize;
+        let (a, b) = (jittered.scatter.pixels[i], midpoint.scatter.pixels[i]);
+        eprintln!(
+            "pixel ({x}, {y}), u = 1 - {} / 2^24: jittered {a:?}, midpoint {b:?}",
+            (1 << 24) - jitter_numerator(x, y)
+        );
+        for c in 0..3 {
+            assert!(b[c] > 0.0, "pixel ({x}, {y}) is not lit: the test looks at the wrong place");
+            let rel = (a[c] - b[c]).abs() / b[c];
+            assert!(rel < 0.05, "pixel ({x}, {y}) channel {c}: jittered {} against midpoint {} ({rel})", a[c], b[c]);
+        }
+    }
+}
+
 #[test]
 fn timings_name_the_raymarch_pass_and_shadow_map_size_is_a_setting() {
     let Some(mut r) = renderer() else { return };
