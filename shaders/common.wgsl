@@ -112,6 +112,19 @@ fn pixel_dir(f: Frame, p: vec2f) -> vec3f {
 
 // ---- epipolar coordinates (src/epipolar.rs) ------------------------------------------------
 
+// sin(x) for x in [0, pi] with a small relative error also near both ends, where formulas divide
+// by it. WGSL bounds sin only by an absolute error of 2^-11 on [-pi, pi] (NVIDIA's hardware sine
+// by about 2^-21): near 0 or pi that is an unbounded relative error, and 1 / sin(gamma) of a ray
+// through the light multiplies it. The ends take sin's series (truncation < 1e-10 relative).
+fn sin_rel(x: f32) -> f32 {
+    let y = min(x, PI - x);
+    if (y < 0.25) {
+        let y2 = y * y;
+        return y * (1.0 - y2 / 6.0 * (1.0 - y2 / 20.0 * (1.0 - y2 / 42.0)));
+    }
+    return sin(x);
+}
+
 fn angle_between(a: vec3f, b: vec3f) -> f32 {
     return atan2(length(cross(a, b)), dot(a, b));
 }

@@ -390,7 +390,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
         let x = PI - gp;
         var ratio = 1.0 / f.axis.w;
-        if (x > 1e-4) { ratio = x / max(f.axis.w * sin(gp), 1e-7 * f.axis.w); }
+        if (x > 1e-4) { ratio = x / max(f.axis.w * sin_rel(gp), 1e-7 * f.axis.w); }
         // The table has exp(-sigma_t D) factored out; it joins the log of the prefactor in one exp,
         // so a bright light in a thick medium (sigma_t D > 87) is not flushed to 0 with exp(-sigma_t D)
         // (numerical-stability fix, docs/stability.md, medium/thick-bright).

@@ -28,7 +28,7 @@
 var<private> f: Frame;
 
 fn integrand(gamma: f32, psi: f32, h2: f32) -> vec3f {
-    let s = sin(gamma + psi);
+    let s = sin_rel(gamma + psi);
     // t + d - D = D (sin psi + sin gamma - sin(gamma + psi)) / sin(gamma + psi), with the numerator
     // as 2 sin psi sin^2(gamma/2) + 2 sin gamma sin^2(psi/2): non-negative terms, no cancellation.
     let sg = sin(0.5 * gamma);
@@ -52,7 +52,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     if (j >= rows) { return; }
     let sj = f32(j) / f32(rows - 1u);
     let gamma = f.ranges.x + sj * sj * (f.ranges.y - f.ranges.x);
-    let h = f.axis.w * sin(gamma);
+    let h = f.axis.w * sin_rel(gamma);
     let h2 = h * h;
     let width = (PI - gamma) / f32(cols);
     // Gauss-Legendre nodes and weights on [0, 1].

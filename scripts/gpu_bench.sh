@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# The benches docs/results.md records for a hardware GPU, in one run that stops by a deadline:
+# the classroom at 512x512 (the issue's target: VSV's default grid against the march's sweep,
+# three interleaved rounds), at 1024x1024 (which holds the paper's 1024x1024x256 grid), the
+# time-against-triangles sweep, and the bunny at 1024x1024. Each bench writes its report.md,
+# results.csv and plots into a folder of OUT_DIR; `render --json` adds the adapter and one frame's
+# per-pass GPU times at 1024x1024 for the default grid and the paper's, and the bunny's scattered
+# light as EXR.
+#
+#   scripts/gpu_bench.sh OUT_DIR [EPIVOX] [CACHE_DIR] [SECONDS]
+#
+# EPIVOX defaults to target/release/epivox, CACHE_DIR (the references; a 1024x1024 classroom
+# reference takes minutes of CPU) to OUT_DIR/cache, SECONDS (the whole run's budget) to 480. A bench
+# that would run past the deadline is stopped and the next is skipped; what finished is kept.
+set -uo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+out=${1:?usage: scripts/gpu_bench.sh OUT_DIR [EPIVOX] [CACHE_DIR] [SECONDS]}
+epivox=${2:-target/release/epivox}
+cache=${3:-$out/cache}
+deadline=$(($(date +%s) + ${4:-480}))
+classroom=../shared/scenes/japanese_classroom
+bunny=../shared/scenes/stanford_bunny/bun_zipper.ply
+mkdir -p "$out"
+
+# Runs "$@" with what is left of the budget, logging to OUT_DIR/NAME.log; prints the wall time.
+step() {
+    local name=$1
+    shift
+    local left=$((deadline - $(date +%s)))
+    if ((left < 10)); then
+        echo "$name: skipped, the budget is spent"
+        return
+    fi
+    local t0=$SECONDS
+    timeout "$left" "$@" >"$out/$name.log" 2>&1
+    echo "$name: exit status $? after $((SECONDS - t0)) s"
+}
+
+command -v nvidia-smi >/dev/null && nvidia-smi >"$out/nvidia-smi.txt" 2>&1
+step render_default "$epivox" render "$classroom" --size 1024x1024 --json --out "$out/classroom_1024.png"
+step render_paper "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
+    --out "$out/classroom_1024_grid1024x1024x256.png"
+# The bunny's scattered light, to compare with its reference pixel by pixel (its worst pixel is the
+# light's own: 246 in the reference, where 1 / sin(gamma) magnifies any error of sin).
+step render_bunny "$epivox" render "$bunny" --size 1024x1024 --json --out "$out/bunny_1024.png" \
+    --scatter-exr "$out/bunny_1024_scatter.exr"
+step classroom512 "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
+    --cache-dir "$cache" --out "$out/classroom512"
+step classroom1024 "$epivox" bench "$classroom" --size 1024x1024 --frames 5 --rounds 3 --no-scaling \
+    --cache-dir "$cache" --out "$out/classroom1024"
+step scaling "$epivox" bench "$classroom" --size 512x512 --frames 3 --cache-dir "$cache" \
+    --out "$out/scaling"
+[[ -f $bunny ]] && step bunny "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
+    --cache-dir "$cache" --out "$out/bunny"
+
+# The lines a reader wants first: the adapter and each bench's ratio.
+grep -h '"adapter"' "$out"/render_*.log 2>/dev/null | head -1
+for r in "$out"/*/report.md; do
+    [[ -f $r ]] && echo "$r" && grep -h "^| vsv |" "$r" | head -14
+done
