@@ -1,0 +1,97 @@
+//! common.wgsl's numerics, run on the adapter (the software Vulkan driver in CI) and compared with
+//! f64 on the CPU.
+
+use epivox::gpu::{GpuContext, GpuError, ShaderLibrary};
+use wgpu::util::DeviceExt;
+
+/// Evaluates `function` of common.wgsl (f32 -> f32) at each of `xs` on the GPU.
+fn eval(function: &str, xs: &[f32]) -> Option<Vec<f32>> {
+    let ctx = match GpuContext::headless() {
+        Ok(ctx) => ctx,
+        Err(GpuError::NoAdapter) => {
+            eprintln!("SKIPPED: no GPU adapter at all (install mesa-vulkan-drivers for the software one)");
+            return None;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    // A probe shader beside the embedded ones: a folder holding only it (imports fall back to
+    // the embedded common.wgsl).
+    let dir = std::env::temp_dir().join(format!("epivox-shader-math-{}-{function}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let probe = format!(
+        "#import common\n\
+         @group(0) @binding(0) var<storage, read_write> xs: array<f32>;\n\
+         @compute @workgroup_size(64)\n\
+         fn main(@builtin(global_invocation_id) id: vec3u) {{\n\
+             if (id.x < arrayLength(&xs)) {{ xs[id.x] = {function}(xs[id.x]); }}\n\
+         }}\n"
+    );
+    std::fs::write(dir.join("probe.wgsl"), probe).unwrap_or_else(|e| panic!("{e}"));
+    let library = ShaderLibrary::new(Some(dir.clone()));
+    let module = library.module(&ctx.device, "probe.wgsl").unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let device = &ctx.device;
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("shader_math::pipeline"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bytes: Vec<u8> = xs.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("shader_math::xs"),
+        contents: &bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("shader_math::bind_group"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+    });
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("shader_math") });
+    {
+        let mut pass =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("shader_math"), timestamp_writes: None });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups((xs.len() as u32).div_ceil(64), 1, 1);
+    }
+    ctx.queue.submit([enc.finish()]);
+    let out = ctx.read_buffer(&buffer).unwrap_or_else(|e| panic!("{e}"));
+    Some(out.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+}
+
+/// sin_rel keeps a small relative error at both ends of [0, pi], where Integrate divides by it
+/// (1 / sin(gamma) for the ray through a point light). WGSL lets sin itself err by 2^-11 in
+/// absolute terms; the series must hold 1e-6 relative (a few f32 ulps) from 1e-30 up to 0.25 rad
+/// from 0, whatever the driver's sin. Toward pi the distance pi - x is taken from f32(pi), 8.7e-8
+/// above pi, so there the bound is 1e-6 relative plus 1e-7 absolute. The middle is the driver's
+/// sin: 1e-4 relative is what llvmpipe and hardware easily give (2^-11 would allow 5e-4 at 1 rad).
+#[test]
+fn sin_rel_is_relatively_accurate_near_zero_and_pi() {
+    let pi = std::f64::consts::PI;
+    let mut xs: Vec<f32> = (0..=300).map(|i| 10f64.powf(-30.0 + 29.4 * i as f64 / 300.0) as f32).collect();
+    // Toward pi: pi minus the same small distances, as f32 (the nearest f32 below pi and up).
+    let near_pi: Vec<f32> = xs.iter().map(|&d| (pi - d as f64) as f32).filter(|&x| (x as f64) < pi).collect();
+    xs.extend(near_pi);
+    xs.extend((1..100).map(|i| (pi * i as f64 / 100.0) as f32));
+    // Up to the series' end, where its truncation is largest.
+    xs.extend((0..50).map(|i| (0.2 + 0.05 * i as f64 / 50.0) as f32));
+    let Some(got) = eval("sin_rel", &xs) else { return };
+    let mut checked_ends = 0;
+    for (&x, &g) in xs.iter().zip(&got) {
+        let exact = (x as f64).sin();
+        let err = (g as f64 - exact).abs();
+        let end = (x as f64).min(pi - x as f64) < 0.25;
+        let bound = match (end, (x as f64) > 0.5 * pi) {
+            (true, false) => 1e-6 * exact,
+            (true, true) => 1e-6 * exact + 1e-7,
+            (false, _) => 1e-4 * exact,
+        };
+        assert!(err <= bound, "sin_rel({x:e}) = {g:e}, sin = {exact:e}: error {err:e} (bound {bound:e})");
+        checked_ends += end as usize;
+    }
+    assert!(checked_ends > 300, "{checked_ends} points near the ends");
+}
