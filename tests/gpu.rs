@@ -243,3 +243,46 @@ fn surfaces_are_lit_as_the_reference_lights_them() {
         assert!(share > bound, "{name}: {agree} of {lit} lit surface pixels agree to 1%");
     }
 }
+
+/// The point light's scatter table (scatter_table.wgsl: a workgroup per row, each thread a run of
+/// cells, then the runs' sums) against the same table in f64 (`check::mirror::f64m::table_row`):
+/// every 8th column of rows across the gamma range, a soft light and a forward lobe. Tolerance 1e-4
+/// of the row's total: the f32 sums of 512 cells carry ~512 ulps (3e-5), the driver's exp and sin
+/// a few more; a run added twice or not at all is off by a run's share, 1/64 of the row.
+#[test]
+fn scatter_table_matches_the_f64_mirror() {
+    use epivox::check::mirror::f64m;
+    use epivox::render::{TABLE_COLS, TABLE_ROWS};
+    let Some(mut r) = renderer() else { return };
+    let mut scene =
+        occluder_scene(Light::Point { position: Vec3::new(0.2, 3.0, 0.1), intensity: Vec3::splat(10.0), radius: 0.05 });
+    scene.medium.phase = epivox::params::Phase::HenyeyGreenstein { g: 0.6 };
+    let out = r.render(&scene, 48, 48, Method::Vsv).unwrap();
+    let table = r.read_scatter_table().unwrap();
+    let (rows, cols) = (TABLE_ROWS as usize, TABLE_COLS as usize);
+    assert_eq!(table.len(), rows * (cols + 1));
+    let u = &out.setup.uniforms;
+    let (lo, hi) = (u.ranges.x as f64, u.ranges.y as f64);
+    let (dist, sigma_t, radius) = (u.axis.w as f64, u.sigma_t.x as f64, u.light_power.w as f64);
+    let (id, g) = (scene.medium.phase.id(), scene.medium.phase.g() as f64);
+    for j in [0, 1, 2, 17, 100, 128, 200, rows - 1] {
+        let s = j as f64 / (rows - 1) as f64;
+        // The shader's own f32 gamma, so that only the table's arithmetic differs.
+        let gamma = (u.ranges.x + (s * s) as f32 * (u.ranges.y - u.ranges.x)) as f64;
+        assert!((lo..=hi).contains(&gamma));
+        let want = f64m::table_row(gamma, dist, sigma_t, radius, id, g, cols);
+        let total = want[cols];
+        // (A soft light's G vanishes like h = D sin(gamma) toward its own direction: row 0 may be
+        // at gamma = 0, where the table is 0.)
+        assert!(total > 0.0 || (j == 0 && gamma == 0.0), "row {j}: nothing scatters");
+        for c in (0..=cols).step_by(8).chain([cols]) {
+            let got = table[j * (cols + 1) + c][0] as f64;
+            let err = (got - want[c]).abs();
+            assert!(
+                err <= 1e-4 * total + 1e-30,
+                "row {j} (gamma {gamma}), column {c}: {got} against {} (total {total})",
+                want[c]
+            );
+        }
+    }
+}

@@ -1027,7 +1027,14 @@ impl Renderer {
     /// or one too large for a storage binding), for tests.
     pub fn read_eye_list(&self) -> Result<Option<Vec<u32>>, GpuError> {
         let Some(list) = self.passes.surface.eye_list() else { return Ok(None) };
-        Ok(Some(bytemuck::cast_slice(&self.ctx.read_buffer(list)?).to_vec()))
+        Ok(Some(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(list)?)))
+    }
+
+    /// The point light's scatter table as the last frame left it: `TABLE_ROWS x (TABLE_COLS + 1)`
+    /// cumulative values of `G / (pi - gamma)` (RGB, then 0), row by row (scatter_table.wgsl), for
+    /// tests.
+    pub fn read_scatter_table(&self) -> Result<Vec<[f32; 4]>, GpuError> {
+        Ok(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(&self.passes.scatter_table.table)?))
     }
 
     /// Voxelize's work items per thread and 32-bit words of bins per item (each at least 1; the

@@ -36,7 +36,8 @@ impl ScatterTable {
         let table = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ScatterTable::table"),
             size: Self::BYTES,
-            usage: wgpu::BufferUsages::STORAGE,
+            // COPY_SRC: Renderer::read_scatter_table (tests).
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         Ok(ScatterTable { pipelines, layout, bind_group: None, table })
@@ -62,6 +63,7 @@ impl ScatterTable {
         });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(TABLE_ROWS.div_ceil(64), 1, 1);
+        // A workgroup per row (scatter_table.wgsl).
+        pass.dispatch_workgroups(TABLE_ROWS, 1, 1);
     }
 }
