@@ -341,7 +341,7 @@ pub struct BenchResults {
     pub width: u32,
     pub height: u32,
     pub adapter: String,
-    /// "GPU timestamps" or, on an adapter without them, "wall clock (includes read-back)".
+    /// "GPU timestamps" or, on an adapter without them, "wall clock (a frame submitted and waited for)".
     pub timing_source: &'static str,
     /// Rounds the error sweep was timed in ([`BenchOptions::rounds`]).
     pub rounds: usize,
@@ -410,7 +410,42 @@ impl Frames {
     }
 }
 
-/// Renders `warmup + frames` frames of `point` and returns the timed frames and the last one.
+/// Renders `warmup + frames` frames of `point` and returns the timed frames and the last one's
+/// info. The frames follow each other with nothing but the next frame's set-up between them: a
+/// hardware GPU is not left idle between timed frames (where it may lower its clocks) while
+/// images are read back and compared ([`measure_frames`] does that once, after the timing).
+fn time_frames(
+    r: &mut Renderer,
+    scene: &mut Scene,
+    width: u32,
+    height: u32,
+    point: &Point,
+    warmup: usize,
+    frames: usize,
+) -> Result<(Frames, crate::render::FrameInfo), RenderError> {
+    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
+    scene.grid = point.grid;
+    for _ in 0..warmup {
+        r.render_frame(scene, width, height, point.method)?;
+    }
+    let frames = frames.max(1);
+    let mut timed =
+        Frames { passes: Vec::with_capacity(frames), wall: Vec::with_capacity(frames), rounds: vec![frames] };
+    let mut last = None;
+    for _ in 0..frames {
+        let started = Instant::now();
+        let info = r.render_frame(scene, width, height, point.method)?;
+        // (Reading the timestamps waits for the frame; without them this does.)
+        r.ctx.wait()?;
+        timed.wall.push(started.elapsed().as_secs_f64() * 1e3);
+        timed.passes.push(info.timings.iter().map(|t| (t.pass, t.ms)).collect());
+        last = Some(info);
+    }
+    let Some(last) = last else { unreachable!("frames >= 1") };
+    Ok((timed, last))
+}
+
+/// [`time_frames`], then the last frame's images.
 fn measure_frames(
     r: &mut Renderer,
     scene: &mut Scene,
@@ -420,24 +455,8 @@ fn measure_frames(
     warmup: usize,
     frames: usize,
 ) -> Result<(Frames, crate::render::RenderOutput), RenderError> {
-    r.set_shadow_map_size(point.shadow_map.min(r.ctx.device.limits().max_texture_dimension_2d))?;
-    scene.grid = point.grid;
-    for _ in 0..warmup {
-        r.render(scene, width, height, point.method)?;
-    }
-    let frames = frames.max(1);
-    let mut timed =
-        Frames { passes: Vec::with_capacity(frames), wall: Vec::with_capacity(frames), rounds: vec![frames] };
-    let mut last = None;
-    for _ in 0..frames {
-        let started = Instant::now();
-        let out = r.render(scene, width, height, point.method)?;
-        timed.wall.push(started.elapsed().as_secs_f64() * 1e3);
-        timed.passes.push(out.timings.iter().map(|t| (t.pass, t.ms)).collect());
-        last = Some(out);
-    }
-    let Some(last) = last else { unreachable!("frames >= 1") };
-    Ok((timed, last))
+    let (timed, last) = time_frames(r, scene, width, height, point, warmup, frames)?;
+    Ok((timed, r.read_output(last)?))
 }
 
 /// Times `frames` whole frames of `point`, then `frames` frames that each change only the medium's
@@ -740,7 +759,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         for ((row, pooled), &frames) in rows.iter_mut().zip(timed.iter_mut()).zip(&per_round) {
             let (name, setting) = (row.point.method_name(), row.point.setting());
             bar.set_message(format!("round {round} of {}: {name} {setting}", opts.rounds));
-            match measure_frames(renderer, &mut work, w, h, &row.point, opts.warmup, frames) {
+            match time_frames(renderer, &mut work, w, h, &row.point, opts.warmup, frames) {
                 Ok((more, _)) => {
                     pooled.rounds.push(more.wall.len());
                     pooled.passes.extend(more.passes);
@@ -786,7 +805,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         for p in &scaling {
             bar.set_message(format!("{} {} at {}x{}, {tri} triangles", p.method_name(), p.setting(), size.0, size.1));
             // Median of 3 after one warm-up: these points only time, and the largest take long.
-            match measure_frames(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
+            match time_frames(renderer, scene, size.0, size.1, p, 1, opts.frames.min(3)) {
                 Ok((frames, _)) => {
                     let timing = frames.timing(timestamps);
                     sink.push(ScalingRow { point: *p, triangles: tri, width: size.0, height: size.1, timing })
@@ -818,7 +837,8 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         notes.push("the triangle and resolution sweeps were not run (--no-scaling)".into());
     }
 
-    let timing_source = if renderer.ctx.timestamps { "GPU timestamps" } else { "wall clock (includes read-back)" };
+    let timing_source =
+        if renderer.ctx.timestamps { "GPU timestamps" } else { "wall clock (a frame submitted and waited for)" };
     let light = match scene.light {
         crate::params::Light::Point { position, intensity, radius } => {
             format!("point light at {position}, intensity {intensity}, radius {radius}")

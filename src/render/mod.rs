@@ -979,7 +979,15 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<RenderOutput, RenderError> {
-        let FrameInfo { timings, setup, passes, reused, variant } = self.render_frame(scene, width, height, method)?;
+        let info = self.render_frame(scene, width, height, method)?;
+        self.read_output(info)
+    }
+
+    /// Reads back the final and the scattered image that the frame `info` (the last one
+    /// [`Renderer::render_frame`] returned) left in the targets: what [`Renderer::render`] returns.
+    pub fn read_output(&self, info: FrameInfo) -> Result<RenderOutput, RenderError> {
+        let FrameInfo { timings, setup, passes, reused, variant } = info;
+        let (width, height) = (setup.width, setup.height);
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
             let mut img = Image::new(width, height);
