@@ -286,3 +286,35 @@ fn scatter_table_matches_the_f64_mirror() {
         }
     }
 }
+
+/// Scan with a workgroup per column (`Renderer::scan_columns`, scan_columns.wgsl) sets the same
+/// bits as a thread per column: a point light over the occluder, and the procedural room under a
+/// sun, whose columns fill up early (the write-only tail) at a ray count that is no multiple of
+/// the 64 runs (333 rays: runs of 6, the last threads' empty).
+#[test]
+fn scanning_columns_with_workgroups_sets_the_same_bits() {
+    let Some(mut r) = renderer() else { return };
+    r.reuse_unchanged = false;
+    let mut room = epivox::bench::procedural_scene(20_000);
+    room.light = Light::Directional { direction: Vec3::new(0.4, 1.0, 0.3).normalize(), irradiance: Vec3::splat(2.0) };
+    room.grid = Grid { planes: 300, rays: 333, bins: 256, ..Grid::default() };
+    let point = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
+    for scene in [&point, &room] {
+        assert!(scene.grid.quad_rays(), "{}: the test needs a grid of four-word rays", scene.name);
+        let mut grids = Vec::new();
+        for columns in [false, true] {
+            r.scan_columns = columns;
+            let out = r.render(scene, 64, 48, Method::Vsv).unwrap();
+            assert!(out.passes.contains(&epivox::render::Pass::Scan));
+            grids.push((r.read_grid().unwrap(), out.scatter));
+        }
+        let (a, b) = (&grids[0], &grids[1]);
+        let set = a.0.iter().map(|w| w.count_ones() as u64).sum::<u64>();
+        let full = a.0.iter().filter(|&&w| w == u32::MAX).count();
+        eprintln!("{}: {set} bits set, {full} full words of {}", scene.name, a.0.len());
+        assert!(set > 0 && full > 0, "{}: nothing to scan", scene.name);
+        let differ = a.0.iter().zip(&b.0).filter(|(x, y)| x != y).count();
+        assert_eq!(differ, 0, "{}: {differ} words differ", scene.name);
+        assert_eq!(a.1, b.1, "{}: the images differ", scene.name);
+    }
+}

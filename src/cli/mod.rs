@@ -141,6 +141,10 @@ pub struct RenderArgs {
     /// texels).
     #[arg(long)]
     pub no_shadow_fit: bool,
+    /// Scan each column of the grid with a workgroup instead of a thread (for hardware GPUs; the
+    /// same image: `Renderer::scan_columns`).
+    #[arg(long)]
+    pub scan_columns: bool,
     #[arg(long, value_parser = parse_samples, help = samples_help())]
     pub samples: Option<usize>,
     #[arg(long, value_parser = parse_steps,
@@ -449,6 +453,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             }
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
+            renderer.scan_columns = args.scan_columns;
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;

@@ -18,6 +18,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("voxelize.wgsl", include_str!("../../shaders/voxelize.wgsl")),
     ("scan.wgsl", include_str!("../../shaders/scan.wgsl")),
     ("scan_words.wgsl", include_str!("../../shaders/scan_words.wgsl")),
+    ("scan_columns.wgsl", include_str!("../../shaders/scan_columns.wgsl")),
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),
     ("integrate.wgsl", include_str!("../../shaders/integrate.wgsl")),
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),

@@ -350,6 +350,12 @@ pub struct Renderer {
     /// are solids' faces turned away from the eye) as empty ones, skipping their vertex work (on by
     /// default; the targets are the same either way, off only to compare, `tests/surface_cull.rs`).
     pub surface_culling: bool,
+    /// Scan a column of the grid (a plane's four words of bins) with a workgroup instead of one
+    /// thread (`scan_columns.wgsl`; grids whose rays start on four words): the same bits, made for
+    /// hardware GPUs, where one thread per column leaves most of the chip idle (docs/results.md,
+    /// "On an NVIDIA H200"). Off by default: on llvmpipe it reads the grid twice, and on a GPU it
+    /// is not measured yet (`--scan-columns` on `render` and `bench`).
+    pub scan_columns: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
     /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
     /// on its own only to compare, `tests/occlusion.rs`). It reads the pyramid of an earlier frame
@@ -427,6 +433,7 @@ impl Renderer {
             shadow_face_culling: true,
             back_face_culling: true,
             surface_culling: true,
+            scan_columns: false,
             occlusion_culling: true,
             fit_shadow_map: true,
             last_fitted: false,
@@ -909,7 +916,10 @@ impl Renderer {
                     if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                         f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
                     }
-                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays);
+                    // (The frame's own grid: planes in x, words per ray in w.)
+                    let g = setup.uniforms.grid;
+                    let columns = (v.quad_rays && self.scan_columns).then_some(g.x * g.w / 4);
+                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, columns);
                     f.mark(Pass::Scan);
                 }
                 if setup.frame.is_point() && method == Method::Vsv {
@@ -1057,7 +1067,7 @@ impl Renderer {
     /// (`plane`, `ray`) starts at [`Grid::ray_offset`]), for the inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
         let (_, bits) = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
-        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(bits)?).to_vec())
+        Ok(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(bits)?))
     }
 
     /// Keep a copy of the geometry voxels (the grid before the scan) of every following frame, for
@@ -1075,7 +1085,7 @@ impl Renderer {
         let b = self.geometry_copy.as_ref().filter(|_| self.keep_geometry).ok_or_else(|| {
             GpuError::Readback("the geometry grid is not kept (Renderer::set_keep_geometry_grid)".into())
         })?;
-        Ok(bytemuck::cast_slice(&self.ctx.read_buffer(b)?).to_vec())
+        Ok(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(b)?))
     }
 
     /// Uploads raw grid words (tests use it to check the scan in isolation).
@@ -1234,6 +1244,7 @@ mod binding_tests {
         check("voxelize.wgsl", VoxelizeBindings::SLOTS);
         check("scan.wgsl", ScanBindings::SLOTS);
         check("scan_words.wgsl", ScanBindings::SLOTS);
+        check("scan_columns.wgsl", ScanBindings::SLOTS);
         check("scatter_table.wgsl", ScatterTableBindings::SLOTS);
         check("integrate.wgsl", IntegrateBindings::SLOTS);
         check("raymarch.wgsl", RaymarchBindings::SLOTS);
@@ -1246,7 +1257,7 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 14] = [
+        let passes: [(&str, &[(&str, Kind)]); 15] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
@@ -1257,6 +1268,7 @@ mod binding_tests {
             ("voxelize.wgsl", VoxelizeBindings::SLOTS),
             ("scan.wgsl", ScanBindings::SLOTS),
             ("scan_words.wgsl", ScanBindings::SLOTS),
+            ("scan_columns.wgsl", ScanBindings::SLOTS),
             ("scatter_table.wgsl", ScatterTableBindings::SLOTS),
             ("integrate.wgsl", IntegrateBindings::SLOTS),
             ("raymarch.wgsl", RaymarchBindings::SLOTS),
@@ -1314,7 +1326,9 @@ mod private_array_tests {
 
     #[test]
     fn the_hot_shaders_hold_no_private_array() {
-        for file in ["cull.wgsl", "voxelize.wgsl", "scan.wgsl", "scan_words.wgsl", "integrate.wgsl"] {
+        for file in
+            ["cull.wgsl", "voxelize.wgsl", "scan.wgsl", "scan_words.wgsl", "scan_columns.wgsl", "integrate.wgsl"]
+        {
             let found = private_arrays(file);
             assert!(found.is_empty(), "{file} holds arrays in private or function memory: {found:?}");
         }

@@ -2,6 +2,9 @@
 //! in increasing gamma (`shaders/scan.wgsl`):
 //!
 //!   shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]
+//!
+//! A thread per column (a plane's four words of bins) walks its rays in turn; or, with
+//! `Renderer::scan_columns`, a workgroup per column splits them into runs (`scan_columns.wgsl`).
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
@@ -16,6 +19,8 @@ pub struct Scan {
     quads: wgpu::ComputePipeline,
     /// For the others (`scan_words.wgsl`, a word at a time).
     words: wgpu::ComputePipeline,
+    /// A workgroup per column of four words (`scan_columns.wgsl`).
+    columns: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
 }
@@ -26,7 +31,14 @@ impl Scan {
         let quads = compute_pipeline(device, "Scan::pipeline", &lib.module(device, "scan.wgsl")?, "main", &layout);
         let words =
             compute_pipeline(device, "Scan::pipeline_words", &lib.module(device, "scan_words.wgsl")?, "main", &layout);
-        Ok(Scan { quads, words, layout, bind_group: None })
+        let columns = compute_pipeline(
+            device,
+            "Scan::pipeline_columns",
+            &lib.module(device, "scan_columns.wgsl")?,
+            "main",
+            &layout,
+        );
+        Ok(Scan { quads, words, columns, layout, bind_group: None })
     }
 
     /// (Re)binds the inputs; called when the grid changes.
@@ -35,13 +47,31 @@ impl Scan {
     }
 
     /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept);
-    /// `quad_rays`: [`crate::params::Grid::quad_rays`].
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, args: &wgpu::Buffer, offset: u64, quad_rays: bool) {
+    /// `quad_rays`: [`crate::params::Grid::quad_rays`]. `columns`: scan with a workgroup per column
+    /// of four words instead, this many columns (quad grids only; a direct dispatch, which scans
+    /// the cleared grid too when no caster was kept).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        args: &wgpu::Buffer,
+        offset: u64,
+        quad_rays: bool,
+        columns: Option<u32>,
+    ) {
         let Some(bind_group) = &self.bind_group else { return };
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
-        pass.set_pipeline(if quad_rays { &self.quads } else { &self.words });
         pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups_indirect(args, offset);
+        match columns {
+            Some(n) if quad_rays => {
+                pass.set_pipeline(&self.columns);
+                // scan_columns.wgsl: column = wg.y * 65535 + wg.x.
+                pass.dispatch_workgroups(n.clamp(1, 65535), n.div_ceil(65535).max(1), 1);
+            }
+            _ => {
+                pass.set_pipeline(if quad_rays { &self.quads } else { &self.words });
+                pass.dispatch_workgroups_indirect(args, offset);
+            }
+        }
     }
 }
