@@ -413,7 +413,7 @@ impl Frames {
 /// Renders `warmup + frames` frames of `point` and returns the timed frames and the last one's
 /// info. The frames follow each other with nothing but the next frame's set-up between them: a
 /// hardware GPU is not left idle between timed frames (where it may lower its clocks) while
-/// images are read back and compared ([`measure_frames`] does that once, after the timing).
+/// images are read back and compared (the error sweep does that once per point, after the timing).
 fn time_frames(
     r: &mut Renderer,
     scene: &mut Scene,
@@ -443,20 +443,6 @@ fn time_frames(
     }
     let Some(last) = last else { unreachable!("frames >= 1") };
     Ok((timed, last))
-}
-
-/// [`time_frames`], then the last frame's images.
-fn measure_frames(
-    r: &mut Renderer,
-    scene: &mut Scene,
-    width: u32,
-    height: u32,
-    point: &Point,
-    warmup: usize,
-    frames: usize,
-) -> Result<(Frames, crate::render::RenderOutput), RenderError> {
-    let (timed, last) = time_frames(r, scene, width, height, point, warmup, frames)?;
-    Ok((timed, r.read_output(last)?))
 }
 
 /// Times `frames` whole frames of `point`, then `frames` frames that each change only the medium's
@@ -711,7 +697,9 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
                              notes: &mut Vec<String>|
      -> Result<(), BenchError> {
         bar.set_message(format!("{} {}", p.method_name(), p.setting()));
-        match measure_frames(renderer, &mut work, w, h, p, opts.warmup, frames) {
+        let measured = time_frames(renderer, &mut work, w, h, p, opts.warmup, frames)
+            .and_then(|(frames, last)| Ok((frames, renderer.read_output(last)?)));
+        match measured {
             Ok((frames, o)) => {
                 let timing = frames.timing(timestamps);
                 timed.push(frames);
