@@ -1,19 +1,17 @@
 //! common.wgsl's numerics, run on the adapter (the software Vulkan driver in CI) and compared with
 //! f64 on the CPU.
 
-use epivox::gpu::{GpuContext, GpuError, ShaderLibrary};
+mod common;
+
+use common::renderer;
+use epivox::gpu::ShaderLibrary;
 use wgpu::util::DeviceExt;
 
 /// Evaluates `function` of common.wgsl (f32 -> f32) at each of `xs` on the GPU.
 fn eval(function: &str, xs: &[f32]) -> Option<Vec<f32>> {
-    let ctx = match GpuContext::headless() {
-        Ok(ctx) => ctx,
-        Err(GpuError::NoAdapter) => {
-            eprintln!("SKIPPED: no GPU adapter at all (install mesa-vulkan-drivers for the software one)");
-            return None;
-        }
-        Err(e) => panic!("{e}"),
-    };
+    // (The shared helper: it skips with the usual message when there is no adapter at all.)
+    let r = renderer()?;
+    let ctx = &r.ctx;
     // A probe shader beside the embedded ones: a folder holding only it (imports fall back to
     // the embedded common.wgsl).
     let dir = std::env::temp_dir().join(format!("epivox-shader-math-{}-{function}", std::process::id()));

@@ -916,9 +916,9 @@ impl Renderer {
                     if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                         f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
                     }
-                    // (The frame's own grid: planes in x, words per ray in w.)
+                    // (The frame's own grid: planes in x, words per ray in w; Scan uses it on quad grids.)
                     let g = setup.uniforms.grid;
-                    let columns = (v.quad_rays && self.scan_columns).then_some(g.x * g.w / 4);
+                    let columns = self.scan_columns.then_some(g.x * g.w / 4);
                     p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, columns);
                     f.mark(Pass::Scan);
                 }

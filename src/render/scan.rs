@@ -47,9 +47,9 @@ impl Scan {
     }
 
     /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept);
-    /// `quad_rays`: [`crate::params::Grid::quad_rays`]. `columns`: scan with a workgroup per column
-    /// of four words instead, this many columns (quad grids only; a direct dispatch, which scans
-    /// the cleared grid too when no caster was kept).
+    /// `quad_rays`: [`crate::params::Grid::quad_rays`]. `columns`: on a quad grid, scan with a
+    /// workgroup per column of four words instead, this many columns (a direct dispatch, which scans
+    /// the cleared grid too when no caster was kept); other grids ignore it.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
