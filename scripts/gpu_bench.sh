@@ -5,7 +5,8 @@
 # time-against-triangles sweep, and the bunny at 1024x1024. Each bench writes its report.md,
 # results.csv and plots into a folder of OUT_DIR; `render --json` adds the adapter and one frame's
 # per-pass GPU times at 1024x1024 for the default grid and the paper's (each also with
-# --scan-columns, and the 512x512 bench once more with it), and the bunny's scattered light as EXR.
+# `--scan threads`, the CPU adapters' Scan, and the 512x512 bench once more with it), and the
+# bunny's scattered light as EXR.
 #
 #   scripts/gpu_bench.sh OUT_DIR [EPIVOX] [CACHE_DIR] [SECONDS]
 #
@@ -41,26 +42,26 @@ command -v nvidia-smi >/dev/null && nvidia-smi >"$out/nvidia-smi.txt" 2>&1
 step render_default "$epivox" render "$classroom" --size 1024x1024 --json --out "$out/classroom_1024.png"
 step render_paper "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
     --out "$out/classroom_1024_grid1024x1024x256.png"
-# The same two frames with Scan's workgroup per column (--scan-columns), made for GPUs and not yet
-# measured on one.
-step render_default_columns "$epivox" render "$classroom" --size 1024x1024 --json --scan-columns \
-    --out "$out/classroom_1024_columns.png"
-step render_paper_columns "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
-    --scan-columns --out "$out/classroom_1024_grid1024x1024x256_columns.png"
+# The same two frames with Scan's thread per column (`--scan threads`; a GPU's default is a
+# workgroup per column), to keep the two measured side by side.
+step render_default_threads "$epivox" render "$classroom" --size 1024x1024 --json --scan threads \
+    --out "$out/classroom_1024_threads.png"
+step render_paper_threads "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
+    --scan threads --out "$out/classroom_1024_grid1024x1024x256_threads.png"
 # The bunny's scattered light, to compare with its reference pixel by pixel (its worst pixel is the
 # light's own: 246 in the reference, where 1 / sin(gamma) magnifies any error of sin).
 step render_bunny "$epivox" render "$bunny" --size 1024x1024 --json --out "$out/bunny_1024.png" \
     --scatter-exr "$out/bunny_1024_scatter.exr"
 step classroom512 "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
     --cache-dir "$cache" --out "$out/classroom512"
-step classroom512_columns "$epivox" bench "$classroom" --size 512x512 --frames 5 --no-scaling --scan-columns \
-    --cache-dir "$cache" --out "$out/classroom512_columns"
+step classroom512_threads "$epivox" bench "$classroom" --size 512x512 --frames 5 --no-scaling --scan threads \
+    --cache-dir "$cache" --out "$out/classroom512_threads"
+[[ -f $bunny ]] && step bunny "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
+    --cache-dir "$cache" --out "$out/bunny"
 step classroom1024 "$epivox" bench "$classroom" --size 1024x1024 --frames 5 --rounds 3 --no-scaling \
     --cache-dir "$cache" --out "$out/classroom1024"
 step scaling "$epivox" bench "$classroom" --size 512x512 --frames 3 --cache-dir "$cache" \
     --out "$out/scaling"
-[[ -f $bunny ]] && step bunny "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
-    --cache-dir "$cache" --out "$out/bunny"
 
 # The lines a reader wants first: the adapter and each bench's ratio.
 grep -h '"adapter"' "$out"/render_*.log 2>/dev/null | head -1

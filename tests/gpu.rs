@@ -294,6 +294,8 @@ fn scatter_table_matches_the_f64_mirror() {
 #[test]
 fn scanning_columns_with_workgroups_sets_the_same_bits() {
     let Some(mut r) = renderer() else { return };
+    // The default follows the adapter: workgroups on a hardware GPU, threads on a CPU one.
+    assert_eq!(r.scan_columns, r.ctx.info.device_type != wgpu::DeviceType::Cpu, "{}", r.ctx.adapter_name());
     r.reuse_unchanged = false;
     let mut room = epivox::bench::procedural_scene(20_000);
     room.light = Light::Directional { direction: Vec3::new(0.4, 1.0, 0.3).normalize(), irradiance: Vec3::splat(2.0) };

@@ -666,9 +666,11 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         }
     }
 
-    if renderer.scan_columns {
-        notes.push("Scan: a workgroup per column of four words (--scan-columns, scan_columns.wgsl)".into());
-    }
+    notes.push(if renderer.scan_columns {
+        "Scan: a workgroup per column of four words (`--scan columns`, scan_columns.wgsl)".into()
+    } else {
+        "Scan: a thread per column (`--scan threads`, scan.wgsl)".into()
+    });
     let mut points = error_sweep(opts.quick);
     if let Err(e) = FrameSetup::new(scene, w, h, Method::Cartesian) {
         notes.push(format!("cartesian: skipped, it does not apply to this view and light: {e}"));

@@ -45,10 +45,10 @@ pub struct BenchArgs {
     /// Skip the time-against-triangles and time-against-resolution sweeps.
     #[arg(long)]
     pub no_scaling: bool,
-    /// Scan each column of the grid with a workgroup instead of a thread (for hardware GPUs; the
-    /// same images: `Renderer::scan_columns`).
-    #[arg(long)]
-    pub scan_columns: bool,
+    /// How Scan ORs the grid's columns (the same images either way) [default: columns on a
+    /// hardware GPU, threads on a CPU adapter: `Renderer::scan_columns`].
+    #[arg(long, value_enum)]
+    pub scan: Option<super::ScanBy>,
     #[arg(long, value_parser = super::parse_samples, help = super::samples_help())]
     pub samples: Option<usize>,
 }
@@ -90,7 +90,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
 
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
-    renderer.scan_columns = args.scan_columns;
+    super::ScanBy::apply(args.scan, &mut renderer);
     eprintln!(
         "benchmarking {} ({} triangles) at {}x{} on {}",
         scene.name,

@@ -66,6 +66,24 @@ pub enum Command {
     Bench(bench::BenchArgs),
 }
 
+/// How Scan ORs each column of the grid (`Renderer::scan_columns`).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
+pub enum ScanBy {
+    /// A thread per column (scan.wgsl, scan_words.wgsl): the CPU adapters' default.
+    Threads,
+    /// A workgroup per column of four words (scan_columns.wgsl): the hardware GPUs' default.
+    Columns,
+}
+
+impl ScanBy {
+    /// Sets the renderer's choice when one was given, else keeps its adapter's default.
+    pub fn apply(choice: Option<ScanBy>, renderer: &mut Renderer) {
+        if let Some(by) = choice {
+            renderer.scan_columns = by == ScanBy::Columns;
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
 pub enum Method {
     /// Voxelized Epipolar Shadow Volumes on the GPU.
@@ -141,10 +159,10 @@ pub struct RenderArgs {
     /// texels).
     #[arg(long)]
     pub no_shadow_fit: bool,
-    /// Scan each column of the grid with a workgroup instead of a thread (for hardware GPUs; the
-    /// same image: `Renderer::scan_columns`).
-    #[arg(long)]
-    pub scan_columns: bool,
+    /// How Scan ORs the grid's columns (the same image either way) [default: columns on a hardware
+    /// GPU, threads on a CPU adapter: `Renderer::scan_columns`].
+    #[arg(long, value_enum)]
+    pub scan: Option<ScanBy>,
     #[arg(long, value_parser = parse_samples, help = samples_help())]
     pub samples: Option<usize>,
     #[arg(long, value_parser = parse_steps,
@@ -453,7 +471,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             }
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
-            renderer.scan_columns = args.scan_columns;
+            ScanBy::apply(args.scan, &mut renderer);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;

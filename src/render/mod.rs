@@ -351,10 +351,11 @@ pub struct Renderer {
     /// default; the targets are the same either way, off only to compare, `tests/surface_cull.rs`).
     pub surface_culling: bool,
     /// Scan a column of the grid (a plane's four words of bins) with a workgroup instead of one
-    /// thread (`scan_columns.wgsl`; grids whose rays start on four words): the same bits, made for
-    /// hardware GPUs, where one thread per column leaves most of the chip idle (docs/results.md,
-    /// "On an NVIDIA H200"). Off by default: on llvmpipe it reads the grid twice, and on a GPU it
-    /// is not measured yet (`--scan-columns` on `render` and `bench`).
+    /// thread (`scan_columns.wgsl`; grids whose rays start on four words): the same bits. On by
+    /// default on hardware GPUs, where one thread per column leaves most of the chip idle (on an
+    /// H200 it takes the paper's grid's Scan from 0.50 to 0.06 ms, docs/results.md); off on CPU
+    /// adapters (llvmpipe), whose few threads are all busy either way and where it reads the grid
+    /// twice (classroom frame 261-285 -> 353-398 ms). `--scan threads|columns` overrides it.
     pub scan_columns: bool,
     /// Directional lights: Cull drops the triangles the shadow map shows behind nearer surfaces
     /// all around them ([`ShadowPyramid`]; on by default, part of pruning: off with `prune`, and
@@ -426,6 +427,7 @@ impl Renderer {
         let shadow_uniforms =
             uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>(), wgpu::BufferUsages::COPY_SRC);
         let timer = GpuTimer::new(&ctx);
+        let scan_columns = ctx.info.device_type != wgpu::DeviceType::Cpu;
         Ok(Renderer {
             ctx,
             passes,
@@ -433,7 +435,7 @@ impl Renderer {
             shadow_face_culling: true,
             back_face_culling: true,
             surface_culling: true,
-            scan_columns: false,
+            scan_columns,
             occlusion_culling: true,
             fit_shadow_map: true,
             last_fitted: false,
