@@ -450,31 +450,9 @@ fn diag(b: &Aabb) -> f32 {
 /// than 4 times larger (diagonal) than everything else together. The classroom's 220 m floor plane
 /// would otherwise set the medium's density and the default light for a 10 m room.
 pub(crate) fn core_bounds(meshes: &[Mesh]) -> Aabb {
-    let b: Vec<Aabb> = meshes.iter().map(|m| m.bounds()).collect();
-    let n = b.len();
-    let mut prefix = vec![Aabb::EMPTY; n + 1];
-    for i in 0..n {
-        prefix[i + 1] = prefix[i].union(&b[i]);
-    }
-    let mut suffix = vec![Aabb::EMPTY; n + 1];
-    for i in (0..n).rev() {
-        suffix[i] = suffix[i + 1].union(&b[i]);
-    }
-    let mut core = Aabb::EMPTY;
-    for i in 0..n {
-        let others = prefix[i].union(&suffix[i + 1]);
-        let outlier = meshes[i].triangles.len() <= 16 && !others.is_empty() && diag(&b[i]) > 4.0 * diag(&others);
-        if outlier {
-            log::info!("mesh '{}' treated as a ground plane for the scene's default sizes", meshes[i].name);
-        } else {
-            core = core.union(&b[i]);
-        }
-    }
-    if core.is_empty() {
-        prefix[n]
-    } else {
-        core
-    }
+    super::bounds_without_backdrops(meshes, diag, |m| {
+        log::info!("mesh '{}' treated as a ground plane for the scene's default sizes", m.name)
+    })
 }
 
 /// Builds a point light from an emissive surface; `None` when the surface is degenerate.
