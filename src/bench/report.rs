@@ -576,7 +576,10 @@ fn paper_section(s: &mut String, r: &BenchResults) {
         let ours = row.timing.passes.iter().find(|p| p.0 == pass).map(|p| p.1).unwrap_or(f64::NAN);
         ours_sum += if ours.is_finite() { ours } else { 0.0 };
         let paper = if lo == hi { format!("{lo}") } else { format!("{lo} to {hi}") };
-        let _ = writeln!(s, "| {name} | {paper} | {} | {:.0}x |", ms(ours), ours / hi);
+        // Two decimals below 10: a GPU's stages are a fraction of the paper's.
+        let ratio = ours / hi;
+        let ratio = if ratio < 10.0 { format!("{ratio:.2}") } else { format!("{ratio:.0}") };
+        let _ = writeln!(s, "| {name} | {paper} | {} | {ratio}x |", ms(ours));
     }
     let _ = writeln!(
         s,
