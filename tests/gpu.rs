@@ -288,9 +288,10 @@ fn scatter_table_matches_the_f64_mirror() {
 }
 
 /// Scan with a workgroup per column (`Renderer::scan_columns`, scan_columns.wgsl) sets the same
-/// bits as a thread per column: a point light over the occluder, and the procedural room under a
-/// sun, whose columns fill up early (the write-only tail) at a ray count that is no multiple of
-/// the 64 runs (333 rays: runs of 6, the last threads' empty).
+/// bits as a thread per column: a point light over the occluder (one vector of bins per ray), and
+/// the procedural room under a sun (six: 768 bins), whose columns fill up early (the write-only
+/// tail) at a ray count that is no multiple of the 64 runs (333 rays: runs of 6, the last
+/// threads' empty).
 #[test]
 fn scanning_columns_with_workgroups_sets_the_same_bits() {
     let Some(mut r) = renderer() else { return };
@@ -299,7 +300,7 @@ fn scanning_columns_with_workgroups_sets_the_same_bits() {
     r.reuse_unchanged = false;
     let mut room = epivox::bench::procedural_scene(20_000);
     room.light = Light::Directional { direction: Vec3::new(0.4, 1.0, 0.3).normalize(), irradiance: Vec3::splat(2.0) };
-    room.grid = Grid { planes: 300, rays: 333, bins: 256, ..Grid::default() };
+    room.grid = Grid { planes: 300, rays: 333, bins: 768, ..Grid::default() };
     let point = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
     for scene in [&point, &room] {
         assert!(scene.grid.quad_rays(), "{}: the test needs a grid of four-word rays", scene.name);
