@@ -5,8 +5,8 @@
 # time-against-triangles sweep, and the bunny at 1024x1024. Each bench writes its report.md,
 # results.csv and plots into a folder of OUT_DIR; `render --json` adds the adapter and one frame's
 # per-pass GPU times at 1024x1024 for the default grid and the paper's (each also with
-# `--scan threads`, the CPU adapters' Scan, and the 512x512 bench once more with it), and the
-# bunny's scattered light as EXR.
+# `--scan threads`, the CPU adapters' Scan, and the 512x512 bench once more with it), the
+# bunny's scattered light as EXR, and Surface's time with its fragment shader cut down.
 #
 #   scripts/gpu_bench.sh OUT_DIR [EPIVOX] [CACHE_DIR] [SECONDS]
 #
@@ -52,6 +52,34 @@ step render_paper_threads "$epivox" render "$classroom" --size 1024x1024 --grid 
 # light's own: 246 in the reference, where 1 / sin(gamma) magnifies any error of sin).
 step render_bunny "$epivox" render "$bunny" --size 1024x1024 --json --out "$out/bunny_1024.png" \
     --scatter-exr "$out/bunny_1024_scatter.exr"
+# Where Surface's time goes on a GPU that rasterizes on a few of its units (the H200: 1.21 ms at
+# 1024x1024, against 0.029 ms for Composite, a compute pass over the same pixels): the same frame
+# with Surface's fragment shader cut down and its two outputs kept, through EPIVOX_SHADER_DIR
+# (the images are wrong; only Surface's time counts). "flat": constants; "no_normal": albedo and
+# distance, without the derivatives and normalizations. Near "flat", the fragment work is the
+# cost, and a visibility buffer resolved in compute would pay; near the default, rasterizing is.
+surface_variant() {
+    local dir=$out/shaders_$1
+    mkdir -p "$dir" && cp shaders/*.wgsl "$dir"/ && sed -i '/^@fragment/,$d' "$dir/surface.wgsl"
+    cat >>"$dir/surface.wgsl"
+}
+surface_variant flat <<'WGSL'
+@fragment
+fn fs_main(i: VsOut) -> FsOut {
+    return FsOut(vec4f(0.5), vec4f(1.0, 0.0, 0.0, 0.0));
+}
+WGSL
+surface_variant no_normal <<'WGSL'
+@fragment
+fn fs_main(i: VsOut) -> FsOut {
+    f = frame_in;
+    return FsOut(vec4f(i.albedo, 0.5), vec4f(length(f.eye.xyz - i.world), 0.0, 0.0, 0.0));
+}
+WGSL
+for v in flat no_normal; do
+    EPIVOX_SHADER_DIR=$out/shaders_$v step "render_surface_$v" "$epivox" render "$classroom" \
+        --size 1024x1024 --json --out "$out/surface_$v.png"
+done
 step classroom512 "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
     --cache-dir "$cache" --out "$out/classroom512"
 step classroom512_threads "$epivox" bench "$classroom" --size 512x512 --frames 5 --no-scaling --scan threads \
