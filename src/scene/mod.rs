@@ -257,7 +257,7 @@ impl Scene {
 
     /// A 64-bit hash of the meshes' content (positions, triangles, albedo), so that a renderer can
     /// tell when it must upload the geometry again: two scenes with the same triangle count but
-    /// different meshes differ here. About a millisecond per million vertices.
+    /// different meshes differ here. About half a millisecond for the classroom (104 000 triangles).
     pub fn geometry_fingerprint(&self) -> u64 {
         // A multiply-rotate hash over the raw words, two at a time: fast (the renderer checks it
         // every frame), and collisions between real scenes are as likely as between random 64-bit
