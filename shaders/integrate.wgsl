@@ -343,7 +343,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     }
     let v = pixel_dir(f, vec2f(id.xy));
     let a = f.axis.xyz;
-    let gamma = angle_between(a, v);
+    let gamma = gamma_of_pixel(f, vec2f(id.xy), v);
     let gc = grid_coords(f, v);
     let surface = textureLoad(distance, vec2i(id.xy), 0).xy;
     let t_s = surface.x;

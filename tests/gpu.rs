@@ -321,3 +321,52 @@ fn scanning_columns_with_workgroups_sets_the_same_bits() {
         assert_eq!(a.1, b.1, "{}: the images differ", scene.name);
     }
 }
+
+/// The pixel whose ray passes next to a point light: its in-scattering goes as 1 / sin(gamma), so
+/// an f32 view direction off by an ulp (~6e-8, which is how drivers differ: the H200 put the
+/// bunny's light pixel 1.6e-4 from the reference, llvmpipe 1.3e-5) would move it by 6e-8 / gamma
+/// relative. Integrate takes gamma from the pixel's exact offset to the epipole instead
+/// (`gamma_of_pixel`, common.wgsl): here Integrate's view direction is nudged by an ulp per
+/// component (a copy of integrate.wgsl, one line changed) and the light's pixel must stay within
+/// 2e-5 of its value (with the angle between the f32 directions it moved by 4e-4 here).
+#[test]
+fn the_pixel_next_to_the_light_does_not_hang_on_the_directions_last_bits() {
+    let Some(mut plain) = renderer() else { return };
+    let (w, h) = (64u32, 48u32);
+    let mut scene = occluder_scene(point_light(Vec3::ZERO));
+    // The light 3 m out along the ray a few thousandths of a pixel off pixel (40, 20)'s centre.
+    let (px, py) = (40usize, 20usize);
+    let dir = scene.camera.pixel_dir_f64(px as f64 + 0.003, py as f64 - 0.002, w, h);
+    scene.light = point_light(scene.camera.eye + (dir * 3.0).as_vec3());
+    let source = epivox::gpu::EMBEDDED.iter().find(|(n, _)| *n == "integrate.wgsl").map(|(_, s)| *s).unwrap_or("");
+    let line = "let v = pixel_dir(f, vec2f(id.xy));";
+    assert!(source.contains(line), "integrate.wgsl no longer has the line this test nudges: {line}");
+    let nudged = source.replace(line, "let v = normalize(pixel_dir(f, vec2f(id.xy)) + vec3f(6e-8, -6e-8, 6e-8));");
+    let dir = std::env::temp_dir().join(format!("epivox-nudged-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(dir.join("integrate.wgsl"), nudged).unwrap_or_else(|e| panic!("{e}"));
+    // (The folder holds only integrate.wgsl: every other file comes from the embedded copies.)
+    let lib = epivox::gpu::ShaderLibrary::new(Some(dir.clone()));
+    let ctx = epivox::gpu::GpuContext::headless().unwrap_or_else(|e| panic!("{e}"));
+    let mut nudged = epivox::render::Renderer::new(ctx, &lib).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let a = plain.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}")).scatter;
+    let b = nudged.render(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}")).scatter;
+    let i = py * w as usize + px;
+    let brightest = a.pixels.iter().map(|p| p[0]).fold(0.0f32, f32::max);
+    assert_eq!(a.pixels[i][0], brightest, "the light's pixel is not the brightest: the set-up missed it");
+    let moved = (b.pixels[i][0] / a.pixels[i][0] - 1.0).abs();
+    let exact = reference::render(&scene, w, h, &ReferenceOptions { progress: false, ..Default::default() }).scatter;
+    eprintln!(
+        "light pixel {} -> {} ({moved:.2e} relative), reference {} ({:.2e})",
+        a.pixels[i][0],
+        b.pixels[i][0],
+        exact.pixels[i][0],
+        a.pixels[i][0] / exact.pixels[i][0] - 1.0
+    );
+    assert!(moved < 2e-5, "the light's pixel moved by {moved:.2e} with the view direction nudged by an ulp");
+    // And it is the reference's: within 1e-4 (2.5e-5 here, the scatter table's interpolation;
+    // -3.4e-4 from the direction's own angle on llvmpipe).
+    let off = (a.pixels[i][0] as f64 / exact.pixels[i][0] as f64 - 1.0).abs();
+    assert!(off < 1e-4, "the light's pixel is {off:.2e} from the reference's");
+}

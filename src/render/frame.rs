@@ -52,6 +52,34 @@ pub struct FrameUniforms {
     /// them per adapter: [`super::Voxelize`]), and the coarsest shadow-pyramid level Cull reads to
     /// drop triangles hidden from the light (0: no such test; [`super::ShadowPyramid`]); `w` unused.
     pub work: UVec4,
+    /// Where the axis toward the light meets the image, in pixel coordinates (the pixel convention
+    /// of [`crate::scene::Camera::pixel_dir_f64`]: pixel p's centre is at p), computed in f64 and
+    /// split into whole pixels (`xy`) and the fraction (`zw`, in [0, 1)), so that a pixel's offset
+    /// from it keeps full precision (`gamma_of_pixel`, common.wgsl); `NO_EPIPOLE` in `x` when the
+    /// light is not in front of the camera or its point lies too far out of the image.
+    pub epipole: Vec4,
+}
+
+/// `FrameUniforms::epipole.x` when no pixel lies near the light's direction.
+pub const NO_EPIPOLE: f32 = 3.0e38;
+
+/// The epipole ([`FrameUniforms::epipole`]): the light's axis `a` (unit, from the eye) against
+/// the camera basis `r, u, f` and the tangents of the half fields of view.
+fn epipole(a: glam::DVec3, basis: [[f64; 3]; 3], tan_x: f64, tan_y: f64, width: u32, height: u32) -> Vec4 {
+    let [r, u, f] = basis.map(glam::DVec3::from);
+    let depth = a.dot(f);
+    // Past 2^22 pixels the split would lose the fraction; no pixel is near such a point anyway.
+    let far = 4_194_304.0;
+    if depth <= 1e-9 {
+        return Vec4::new(NO_EPIPOLE, 0.0, 0.0, 0.0);
+    }
+    let x = (a.dot(r) / depth / tan_x + 1.0) * 0.5 * width as f64 - 0.5;
+    let y = (1.0 - a.dot(u) / depth / tan_y) * 0.5 * height as f64 - 0.5;
+    if !(x.abs() < far && y.abs() < far) {
+        return Vec4::new(NO_EPIPOLE, 0.0, 0.0, 0.0);
+    }
+    let (xi, yi) = (x.floor(), y.floor());
+    Vec4::new(xi as f32, yi as f32, (x - xi) as f32, (y - yi) as f32)
 }
 
 /// Everything derived from the scene for one frame on the CPU.
@@ -171,6 +199,8 @@ impl FrameSetup {
             mapping.spacing = BinSpacing::UniformAngle;
         }
         let th = (cam.fov_y_deg.to_radians() * 0.5).tan();
+        // As Camera::pixel_dir_f64 has it, for the epipole.
+        let th64 = ((cam.fov_y_deg as f64).to_radians() * 0.5).tan();
         let tw = th * aspect as f32;
         let v3 = |a: [f64; 3], w: f32| Vec4::new(a[0] as f32, a[1] as f32, a[2] as f32, w);
         let (light, power) = match scene.light {
@@ -214,6 +244,7 @@ impl FrameSetup {
             image: UVec4::new(width, height, 0, flags),
             table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
             work: UVec4::new(1, 1, 0, 0),
+            epipole: epipole(frame.axis, [r, u, f], th64 * aspect, th64, width, height),
         };
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
     }

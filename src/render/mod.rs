@@ -1137,7 +1137,7 @@ mod layout_tests {
             "scan.wgsl",
             "Frame",
             fields!(FrameUniforms: cam_right, cam_up, cam_fwd, eye, view_proj, light, light_power, axis, b1, b2,
-                sigma_s, sigma_t, ranges, medium_min, medium_max, grid, image, table, work),
+                sigma_s, sigma_t, ranges, medium_min, medium_max, grid, image, table, work, epipole),
             size_of::<FrameUniforms>(),
         );
     }
