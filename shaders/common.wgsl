@@ -138,8 +138,8 @@ fn angle_between(a: vec3f, b: vec3f) -> f32 {
 // with a small relative error also within a few pixels of the light. There the f32 direction's
 // error of ~6e-8 (an ulp of its unit components) is a relative error of 6e-8 / gamma in gamma,
 // and a point light's in-scattering goes as 1 / sin(gamma): on the bunny at 1024x1024 the light's
-// own pixel (gamma ~ 3e-4) moved by 1.6e-4 on an H200 and by 2e-4 on llvmpipe when v was nudged
-// by an ulp (docs/results.md). Near the epipole e the angle is taken between the camera-space
+// own pixel (gamma ~ 3e-4) moves by 2e-4 on llvmpipe when v is nudged by an ulp, the size of its
+// 1.6e-4 error on an H200 (docs/stability.md, fix 6). Near the epipole e the angle is taken between the camera-space
 // directions w = (x, y, 1) and (e_x, e_y, 1) (tangent units) from the pixel's offset d = p - e,
 // which the f64 split of e keeps exact:  w x e = (d_y, -d_x, d_x e_y - d_y e_x).
 fn gamma_of_pixel(f: Frame, p: vec2f, v: vec3f) -> f32 {

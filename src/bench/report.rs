@@ -384,8 +384,8 @@ pub fn markdown(r: &BenchResults) -> String {
             "\n### Against the cheapest as-accurate baseline point\n\nFor every grid point: the cheapest raymarch point of \
              the sweep whose scattered light is at least as accurate, and its frame time over the grid point's (the \
              speed-up at equal or better error). \"none\": no raymarch point of the sweep is that accurate; the \
-             ratio is then the sweep's most accurate raymarch point's time over the grid point's (≥: a lower bound, \
-             the baseline would need more than its whole sweep). \"By round\": the smallest and the largest ratio of \
+             ratio is then the sweep's most accurate raymarch point's time over the grid point's (the cheapest of \
+             those within 1% of its best error; ≥: a lower bound, the baseline would need more than its whole sweep). \"By round\": the smallest and the largest ratio of \
              each round's medians alone, with several rounds: how far a slow phase of the machine moved it.\n"
         );
         let _ = writeln!(

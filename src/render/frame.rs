@@ -249,3 +249,38 @@ impl FrameSetup {
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Light;
+
+    /// The epipole is where the ray through that (fractional) pixel position is the axis toward
+    /// the light, to f64's precision; its fraction lies in [0, 1); a light behind the eye has none.
+    #[test]
+    fn the_epipole_is_the_pixel_whose_ray_is_the_axis() {
+        let mut scene = crate::scene::builtin_scene();
+        let cam = scene.camera;
+        let (w, h) = (640u32, 360u32);
+        for (px, py) in [(100.3, 200.7), (0.0, 0.0), (639.999, 5.25), (-50.5, 400.0)] {
+            let toward = cam.pixel_dir_f64(px, py, w, h);
+            scene.light = Light::Point {
+                position: (cam.eye.as_dvec3() + toward * 3.0).as_vec3(),
+                intensity: glam::Vec3::ONE,
+                radius: 0.0,
+            };
+            let setup = FrameSetup::new(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+            let e = setup.uniforms.epipole;
+            assert!((0.0..1.0).contains(&e.z) && (0.0..1.0).contains(&e.w), "fraction {e}");
+            let (x, y) = (e.x as f64 + e.z as f64, e.y as f64 + e.w as f64);
+            // The light's f32 position limits the axis to ~1e-7 of 3 m: about 1e-4 pixel here.
+            assert!((x - px).abs() < 1e-3 && (y - py).abs() < 1e-3, "({x}, {y}) for ({px}, {py})");
+            let off = crate::epipolar::angle_between(cam.pixel_dir_f64(x, y, w, h), setup.frame.axis);
+            assert!(off < 1e-9, "the ray through the epipole is {off:e} rad off the axis");
+        }
+        let behind = cam.eye.as_dvec3() - (cam.target - cam.eye).as_dvec3();
+        scene.light = Light::Point { position: behind.as_vec3(), intensity: glam::Vec3::ONE, radius: 0.0 };
+        let setup = FrameSetup::new(&scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(setup.uniforms.epipole.x, NO_EPIPOLE);
+    }
+}

@@ -257,13 +257,17 @@ impl Scene {
 
     /// A 64-bit hash of the meshes' content (positions, triangles, albedo), so that a renderer can
     /// tell when it must upload the geometry again: two scenes with the same triangle count but
-    /// different meshes differ here. About half a millisecond for the classroom (104 000 triangles).
+    /// different meshes differ here. About 0.7 ms for the classroom (104 000 triangles).
     pub fn geometry_fingerprint(&self) -> u64 {
         // A multiply-rotate hash over the raw words, two at a time: fast (the renderer checks it
-        // every frame), and collisions between real scenes are as likely as between random 64-bit
-        // numbers.
+        // every frame). The product's high half is folded back into the low one at every step: a
+        // multiply carries a word's low bits up but never its high bits down, and without the
+        // fold a flipped sign bit and a change in the next word's fifth bit cancelled (review).
         let mut h: u64 = 0x9e37_79b9_7f4a_7c15 ^ self.meshes.len() as u64;
-        let mut eat = |w: u64| h = (h.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95);
+        let mut eat = |w: u64| {
+            h = (h.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95);
+            h ^= h >> 32;
+        };
         let mut words = |ws: &[u32]| {
             let pairs = ws.chunks_exact(2);
             let odd = pairs.remainder().first().map(|&w| w as u64 | 1 << 63);
@@ -403,5 +407,24 @@ mod tests {
         }
         scene.meshes = vec![ground.clone()];
         assert_eq!(scene.core_bounds(), ground.bounds());
+    }
+
+    /// Meshes that differ in a sign and, in the next coordinate, in a bit that the sign's bit
+    /// lands on after one step of the hash: the pair that collided before the fold.
+    #[test]
+    fn the_fingerprint_tells_a_sign_and_the_next_words_low_bits_apart() {
+        let mesh = |b: f32, c: f32| Mesh {
+            name: "m".into(),
+            positions: vec![Vec3::new(1.0, b, c), Vec3::new(4.0, 5.0, 6.0)],
+            triangles: vec![[0, 1, 1]],
+            albedo: Vec3::ONE,
+        };
+        let mut a = builtin::builtin_scene();
+        let mut b = a.clone();
+        a.meshes = vec![mesh(2.0, 3.0)];
+        b.meshes = vec![mesh(-2.0, f32::from_bits(3.0f32.to_bits() + 16))];
+        assert_ne!(a.geometry_fingerprint(), b.geometry_fingerprint());
+        b.meshes = vec![mesh(2.0, 3.0)];
+        assert_eq!(a.geometry_fingerprint(), b.geometry_fingerprint());
     }
 }
