@@ -58,9 +58,10 @@ step render_bunny "$epivox" render "$bunny" --size 1024x1024 --json --out "$out/
 # (the images are wrong; only Surface's time counts). "flat": constants; "no_normal": albedo and
 # distance, without the derivatives and normalizations. Near "flat", the fragment work is the
 # cost, and a visibility buffer resolved in compute would pay; near the default, rasterizing is.
+# (The folder holds surface.wgsl alone: every other shader comes from the binary's own copies.)
 surface_variant() {
     local dir=$out/shaders_$1
-    mkdir -p "$dir" && cp shaders/*.wgsl "$dir"/ && sed -i '/^@fragment/,$d' "$dir/surface.wgsl"
+    mkdir -p "$dir" && sed '/^@fragment/,$d' shaders/surface.wgsl >"$dir/surface.wgsl"
     cat >>"$dir/surface.wgsl"
 }
 surface_variant flat <<'WGSL'
