@@ -186,6 +186,39 @@ impl fmt::Display for ErrorStats {
     }
 }
 
+/// How concentrated the error of `test` against `reference` is: for each fraction `f` of
+/// `fractions` (of the pixels, in (0, 1]), the share of the squared error (summed over the
+/// channels) that the worst `ceil(f * pixels)` pixels hold. A share near `f` means error spread
+/// evenly over the image; near 1, a few pixels hold it (a shadow edge, a seam, one hot pixel), and
+/// finer sampling of the whole image is not what lowers it. `None` when the images do not differ
+/// or the test image has non-finite values (the RMSE is then infinite: [`compare`] says so).
+pub fn worst_pixels_share(
+    test: &Image,
+    reference: &Image,
+    fractions: &[f64],
+) -> Result<Option<Vec<f64>>, MetricsError> {
+    same_size(test, reference)?;
+    let mut sq: Vec<f64> = test
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(a, b)| (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum())
+        .collect();
+    let total: f64 = sq.iter().sum();
+    if !(total.is_finite() && total > 0.0) {
+        return Ok(None);
+    }
+    sq.sort_by(|x, y| y.total_cmp(x));
+    let shares = fractions
+        .iter()
+        .map(|&f| {
+            let n = ((f.clamp(0.0, 1.0) * sq.len() as f64).ceil() as usize).min(sq.len());
+            sq[..n].iter().sum::<f64>() / total
+        })
+        .collect();
+    Ok(Some(shares))
+}
+
 /// A picture of `a` against the reference `b`, side by side: the reference, the image and their
 /// difference, as 8-bit sRGB RGB of `3 width x height`. All three share one scale: the
 /// reference's 99.5th percentile of luminance maps to white, so the two images can be compared by

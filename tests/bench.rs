@@ -158,8 +158,9 @@ fn reference_cache_is_keyed_by_the_data() {
     assert_eq!(get(&base).status, CacheStatus::Hit);
 }
 
-/// The command end to end: `epivox bench --quick` on the built-in scene writes the files, and a
-/// second run into the same folder takes the reference from the cache.
+/// The command end to end: `epivox bench --quick` on the built-in scene writes the files (with the
+/// grids asked for with `--grid`), and a second run into the same folder takes the reference from
+/// the cache.
 #[test]
 fn bench_command_quick_run_and_cache_reuse() {
     if epivox::gpu::GpuContext::headless().is_err() {
@@ -171,6 +172,8 @@ fn bench_command_quick_run_and_cache_reuse() {
     let run = || {
         let o = Command::new(env!("CARGO_BIN_EXE_epivox"))
             .args(["bench", "--quick", "--size", "24x24", "--no-scaling", "--out", out])
+            // A grid of one's own joins the sweep; one the adapter cannot hold is noted and skipped.
+            .args(["--grid", "96x96x64", "--grid", "8192x8192x2048"])
             .output()
             .expect("run epivox");
         let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
@@ -180,6 +183,12 @@ fn bench_command_quick_run_and_cache_reuse() {
     let first = run();
     assert!(first.contains("reference rendered"), "{first}");
     assert!(first.contains("cartesian: skipped"), "the built-in point light has no Cartesian grid: {first}");
+    let own = first.lines().find(|l| l.starts_with("vsv") && l.contains("96x96x64"));
+    assert!(own.is_some_and(|l| l.contains('%')), "the --grid point has no row: {first}");
+    assert!(
+        first.lines().any(|l| l.contains("8192x8192x2048: skipped") && l.contains("allows at most")),
+        "the grid too large for the adapter is not named: {first}"
+    );
     for f in ["results.csv", "report.md", "error_vs_time.png"] {
         assert!(dir.path().join(f).is_file(), "{f} missing");
     }

@@ -85,10 +85,17 @@ fn renders_the_builtin_scene_with_json_and_exr() {
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(j["rel_rmse"].as_f64(), Some(0.0));
     assert_eq!(j["max_abs"].as_f64(), Some(0.0));
-    // And the scattered light differs from the final image.
+    assert!(j.get("worst_pixels_share").is_none(), "equal images have no error to share out: {j}");
+    // And the scattered light differs from the final image, with the worst pixels' share of it.
     let o = epivox(&["compare", exr.to_str().unwrap(), hdr.to_str().unwrap()], &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("rel RMSE"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("rel RMSE") && text.contains("worst pixels: 0.1% "), "{text}");
+    let o = epivox(&["compare", exr.to_str().unwrap(), hdr.to_str().unwrap(), "--json"], &[]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let share = |k: &str| j["worst_pixels_share"][k].as_f64().unwrap_or(f64::NAN);
+    assert!(share("0.1%") <= share("1%") && share("1%") <= share("10%") && share("10%") <= 1.0, "{j}");
+    assert!(share("10%") >= 0.1, "the worst tenth holds at least a tenth: {j}");
 }
 
 /// `--depth-exr` writes where the view rays end; `--view-ends` gives them to the reference, which
@@ -178,6 +185,17 @@ fn bad_flags_are_named() {
         let err = fails(&args, &[]);
         assert!(err.contains(needle), "{flags:?}: expected '{needle}' in: {err}");
     }
+}
+
+#[test]
+fn bench_refuses_a_bad_grid_before_writing_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("results");
+    for (grid, needle) in [("64x64x33", "multiple of 32"), ("64x64", "--grid")] {
+        let err = fails(&["bench", "--quick", "--out", out.to_str().unwrap(), "--grid", grid], &[]);
+        assert!(err.contains(needle), "--grid {grid}: expected '{needle}' in: {err}");
+    }
+    assert!(!out.exists(), "a refused bench created its folder");
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Images (construction, EXR/PNG files, errors) and error metrics on hand-computed cases.
 
 use epivox::image::{encode_srgb8, tone_map_aces, ImageError};
-use epivox::metrics::{compare, MetricsError};
+use epivox::metrics::{compare, worst_pixels_share, MetricsError};
 use epivox::Image;
 
 fn img(width: u32, height: u32, pixels: &[[f32; 3]]) -> Image {
@@ -33,6 +33,36 @@ fn metrics_uniform_difference_2x1() {
     assert!((s.psnr - (-3.0103)).abs() < 1e-4, "{s:?}");
     assert_eq!(s.non_finite, 0);
     assert_eq!(s.pixels, 2);
+}
+
+#[test]
+fn worst_pixels_share_tells_one_bad_pixel_from_error_everywhere() {
+    let zeros = vec![[0.0f32; 3]; 100];
+    let reference = img(10, 10, &zeros);
+    // One pixel of 100 holds all of it: the worst 1% (one pixel), and the worst 0.1% (rounded up
+    // to one pixel), hold 100%.
+    let mut one = zeros.clone();
+    one[37] = [0.5, 0.0, 1.0];
+    let s = worst_pixels_share(&img(10, 10, &one), &reference, &[0.001, 0.01, 0.1]).unwrap().unwrap();
+    assert_eq!(s, [1.0, 1.0, 1.0]);
+    // The same difference in every pixel: the worst 10% hold 10%.
+    let all = vec![[0.25f32, 0.25, 0.25]; 100];
+    let s = worst_pixels_share(&img(10, 10, &all), &reference, &[0.01, 0.1, 1.0]).unwrap().unwrap();
+    assert!(close(s[0], 0.01) && close(s[1], 0.1) && close(s[2], 1.0), "{s:?}");
+    // Two pixels, squared errors 1 + 1 + 1 = 3 and 9 (channels summed): 9/12 in the worst half.
+    let a = img(2, 1, &[[1.0, 1.0, 1.0], [0.0, 0.0, 3.0]]);
+    let b = img(2, 1, &[[0.0; 3], [0.0; 3]]);
+    let s = worst_pixels_share(&a, &b, &[0.5]).unwrap().unwrap();
+    assert!(close(s[0], 0.75), "{s:?}");
+    // Nothing to share out: equal images, or a non-finite value (compare says infinite RMSE).
+    assert_eq!(worst_pixels_share(&reference, &reference, &[0.1]).unwrap(), None);
+    let mut nan = zeros.clone();
+    nan[3] = [f32::NAN, 0.0, 0.0];
+    assert_eq!(worst_pixels_share(&img(10, 10, &nan), &reference, &[0.1]).unwrap(), None);
+    assert!(matches!(
+        worst_pixels_share(&img(2, 1, &[[0.0; 3]; 2]), &reference, &[0.1]),
+        Err(MetricsError::SizeMismatch { .. })
+    ));
 }
 
 #[test]

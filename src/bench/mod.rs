@@ -82,6 +82,9 @@ pub struct BenchOptions {
     pub progress: bool,
     /// Also run the time-against-triangles and time-against-resolution sweeps.
     pub scaling: bool,
+    /// More VSV grids for the error sweep, measured after the built-in ones ([`add_grids`];
+    /// `epivox bench --grid`): to place a grid of one's own on the error-against-time front.
+    pub extra_grids: Vec<Grid>,
     pub reference: ReferenceOptions,
 }
 
@@ -102,6 +105,7 @@ impl BenchOptions {
             out_dir,
             progress: false,
             scaling: true,
+            extra_grids: Vec::new(),
             reference: ReferenceOptions::default(),
         }
     }
@@ -204,6 +208,21 @@ pub fn error_sweep(quick: bool) -> Vec<Point> {
     v.push(Point::march(1024, 4096, false));
     v.push(Point::march(64, map, true));
     v
+}
+
+/// Appends a VSV point for each of `grids` that `points` lacks, in order and once each, on the
+/// shadow map of the sweep's VSV points (the surfaces' shading: the same for every grid).
+pub fn add_grids(points: &mut Vec<Point>, grids: &[Grid]) {
+    let map = points
+        .iter()
+        .find(|p| p.method == Method::Vsv)
+        .map_or(crate::params::Baseline::default().shadow_map, |p| p.shadow_map);
+    for &g in grids {
+        let p = Point::vsv(g, map);
+        if !points.contains(&p) {
+            points.push(p);
+        }
+    }
 }
 
 /// The baseline's maps, in order, when the sweep is extended to reach VSV's error: on each the
@@ -682,6 +701,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         "Scan: a thread per column (scan.wgsl, scan_words.wgsl; `--scan threads`, a CPU adapter's default)".into()
     });
     let mut points = error_sweep(opts.quick);
+    add_grids(&mut points, &opts.extra_grids);
     if let Err(e) = FrameSetup::new(scene, w, h, Method::Cartesian) {
         notes.push(format!("cartesian: skipped, it does not apply to this view and light: {e}"));
         points.retain(|p| p.method != Method::Cartesian);
@@ -934,6 +954,23 @@ mod tests {
         assert!((time_at_error(&f, 0.01).unwrap() - 10.0).abs() < 1e-9);
         assert_eq!(time_at_error(&f, 0.5), Some(1.0));
         assert_eq!(time_at_error(&f, 1e-4), None);
+    }
+
+    #[test]
+    fn extra_grids_join_the_sweep_once_each_on_its_map() {
+        let mut points = error_sweep(false);
+        let before = points.len();
+        let map = points[0].shadow_map;
+        let new = Grid { planes: 4096, rays: 256, bins: 768, ..Grid::default() };
+        // The default grid is in the sweep already; the new one is asked for twice.
+        add_grids(&mut points, &[Grid::default(), new, new]);
+        assert_eq!(points.len(), before + 1);
+        assert_eq!(points[before], Point::vsv(new, map));
+        assert_eq!(points.iter().filter(|p| p.method == Method::Vsv && p.grid == Grid::default()).count(), 1);
+        // A sweep without VSV points takes the baseline's default map.
+        let mut none = Vec::new();
+        add_grids(&mut none, &[new]);
+        assert_eq!(none, [Point::vsv(new, crate::params::Baseline::default().shadow_map)]);
     }
 
     fn row(point: Point, ms: f64, err: f64) -> Row {

@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use epivox::bench::{self, BenchOptions, CacheStatus};
 use epivox::gpu::{GpuContext, ShaderLibrary};
-use epivox::params::Measure;
+use epivox::params::{Grid, Measure};
 use epivox::render::Renderer;
 use epivox::scene::{builtin_scene, load_scene_with_summary};
 use std::path::PathBuf;
@@ -51,6 +51,10 @@ pub struct BenchArgs {
     pub scan: Option<super::ScanBy>,
     #[arg(long, value_parser = super::parse_samples, help = super::samples_help())]
     pub samples: Option<usize>,
+    #[arg(long = "grid", value_name = "GRID", value_parser = super::parse_grid, help = format!(
+        "Another VSV grid to measure, after the sweep's own (repeat for more; one the adapter \
+         cannot hold is noted and skipped). {}", super::grid_help()))]
+    pub grids: Vec<Grid>,
 }
 
 pub fn bench(args: BenchArgs) -> Result<()> {
@@ -83,6 +87,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         opts.cache_dir = c.clone();
     }
     opts.scaling = !args.no_scaling;
+    opts.extra_grids = args.grids.clone();
     opts.progress = true;
     if let Some(n) = args.samples {
         opts.reference.samples = n;

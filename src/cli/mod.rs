@@ -199,7 +199,7 @@ pub(crate) fn size_help() -> String {
     format!("Image size as WIDTHxHEIGHT, each side {}", range_text(&ImageSize::SIDE))
 }
 
-fn grid_help() -> String {
+pub(crate) fn grid_help() -> String {
     format!(
         "Grid resolution PLANESxRAYSxBINS: planes {}, rays {}, bins {} and a multiple of 32",
         range_text(&Grid::PLANES),
@@ -256,7 +256,7 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((side(w, "width")?, side(h, "height")?))
 }
 
-fn parse_grid(s: &str) -> Result<Grid, String> {
+pub(crate) fn parse_grid(s: &str) -> Result<Grid, String> {
     Grid::parse(s).map_err(|e| e.to_string())
 }
 
@@ -618,6 +618,14 @@ fn gain_in_range(s: &str) -> Result<f32, String> {
     Ok(g)
 }
 
+/// The fractions of the pixels `compare` reports the worst of ([`metrics::worst_pixels_share`]).
+const WORST_FRACTIONS: [f64; 3] = [0.001, 0.01, 0.1];
+
+/// `0.1%`, `1%`, `10%`.
+fn percent(f: f64) -> String {
+    format!("{}%", f * 100.0)
+}
+
 pub fn compare(a: &Path, b: &Path, json: bool, diff: Option<&Path>, gain: f32) -> Result<()> {
     if let Some(d) = diff {
         if d.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("png".into()) {
@@ -642,10 +650,24 @@ pub fn compare(a: &Path, b: &Path, json: bool, diff: Option<&Path>, gain: f32) -
         .with_context(|| format!("encoding --diff {}", d.display()))?;
         epivox::fsx::write_bytes_atomic(d, &png).with_context(|| format!("writing --diff {}", d.display()))?;
     }
+    // Where the error lies: in a few pixels (edges) or all over (WORST_FRACTIONS).
+    let worst = metrics::worst_pixels_share(&ia, &ib, &WORST_FRACTIONS)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&stats.to_json())?);
+        let mut j = stats.to_json();
+        if let Some(w) = &worst {
+            let shares: serde_json::Map<_, _> =
+                WORST_FRACTIONS.iter().zip(w).map(|(f, s)| (percent(*f), serde_json::Value::from(*s))).collect();
+            j["worst_pixels_share"] = shares.into();
+        }
+        println!("{}", serde_json::to_string_pretty(&j)?);
     } else {
-        println!("{}", escape_controls(&format!("{} vs {}: {stats}", a.display(), b.display())));
+        let mut line = format!("{} vs {}: {stats}", a.display(), b.display());
+        if let Some(w) = &worst {
+            let parts: Vec<String> =
+                WORST_FRACTIONS.iter().zip(w).map(|(f, s)| format!("{} {:.0}%", percent(*f), s * 100.0)).collect();
+            line += &format!(" | squared error in the worst pixels: {}", parts.join(", "));
+        }
+        println!("{}", escape_controls(&line));
     }
     Ok(())
 }
