@@ -231,39 +231,56 @@ pub fn add_grids(points: &mut Vec<Point>, grids: &[Grid]) {
 /// accurate or stops improving (the map's own limit); then the next, finer map.
 pub const CHASE_MAPS: [u32; 2] = [4096, 8192];
 pub const CHASE_FIRST_STEPS: u32 = 1024;
-pub const CHASE_MAX_STEPS: u32 = 4096;
+/// Where the steps stop doubling on a map. The bunny's march is limited by its steps, not its
+/// map: on the H200 the 4096-step march (0.0403%) was still 13% better than the 2048-step one
+/// and short of VSV (docs/results.md, session 23), so the chase goes on past 4096 steps there.
+pub const CHASE_MAX_STEPS: u32 = crate::params::Baseline::STEPS.max as u32;
+/// A map's chase stops once its march takes this many times the chased VSV point's frame: the
+/// ratio's lower bound is then already twice issue 11's 10x, and a software adapter would spend
+/// minutes a frame on the next doubling (the bunny's 4096-step march takes 23 s on llvmpipe).
+pub const CHASE_MAX_RATIO: f64 = 20.0;
 
 /// The march the chase measures next, or `None` once a march of `rows` is as accurate as their
 /// most accurate VSV point or every map in `maps` is spent. On each map in turn the steps double
 /// from the map's finest march (from [`CHASE_FIRST_STEPS`] on a map without one) up to
-/// [`CHASE_MAX_STEPS`]; a map is spent there, or once doubling the steps lowered the error by
-/// less than 2% (its texels are then the limit).
+/// [`CHASE_MAX_STEPS`]; a map is spent there, once doubling the steps lowered the error by less
+/// than 2% (its texels are then the limit), or once its finest march takes [`CHASE_MAX_RATIO`]
+/// times that VSV point's frame.
 pub fn next_chase_point(rows: &[Row], maps: &[u32]) -> Option<Point> {
-    let best = |method: fn(&Method) -> bool| {
-        rows.iter().filter(|r| method(&r.point.method)).map(|r| r.scatter.rel_rmse).min_by(|a, b| a.total_cmp(b))
-    };
-    let target = best(|m| *m == Method::Vsv)?;
-    let march = best(|m| matches!(m, Method::Raymarch { jitter: false, .. }));
+    let vsv = rows
+        .iter()
+        .filter(|r| r.point.method == Method::Vsv)
+        .min_by(|a, b| a.scatter.rel_rmse.total_cmp(&b.scatter.rel_rmse))?;
+    let target = vsv.scatter.rel_rmse;
+    let march = rows
+        .iter()
+        .filter(|r| matches!(r.point.method, Method::Raymarch { jitter: false, .. }))
+        .map(|r| r.scatter.rel_rmse)
+        .min_by(|a, b| a.total_cmp(b));
     if march.is_some_and(|e| e <= target) {
         return None;
     }
     for &map in maps {
-        // (steps, error) of the plain marches on this map.
-        let on: Vec<(u32, f64)> = rows
+        // (steps, error, frame ms) of the plain marches on this map.
+        let on: Vec<(u32, f64, f64)> = rows
             .iter()
             .filter(|r| r.point.shadow_map == map)
             .filter_map(|r| match r.point.method {
-                Method::Raymarch { steps, jitter: false } => Some((steps, r.scatter.rel_rmse)),
+                Method::Raymarch { steps, jitter: false } => Some((steps, r.scatter.rel_rmse, r.timing.total_ms)),
                 _ => None,
             })
             .collect();
-        let Some(&(top, e_top)) = on.iter().max_by_key(|(steps, _)| *steps) else {
+        let Some(&(top, e_top, ms_top)) = on.iter().max_by_key(|(steps, _, _)| *steps) else {
             return Some(Point::march(CHASE_FIRST_STEPS, map, false));
         };
         if top >= CHASE_MAX_STEPS {
             continue;
         }
-        if on.iter().any(|&(steps, e)| steps == top / 2 && e_top >= 0.98 * e) {
+        if on.iter().any(|&(steps, e, _)| steps == top / 2 && e_top >= 0.98 * e) {
+            continue;
+        }
+        // Past the ratio's cap (the next map starts again at fewer steps).
+        if ms_top >= CHASE_MAX_RATIO * vsv.timing.total_ms {
             continue;
         }
         return Some(Point::march(top * 2, map, false));
@@ -1057,8 +1074,11 @@ mod tests {
         assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(2048, 4096, false)));
         rows.push(row(Point::march(2048, 4096, false), 1800.0, 0.0116));
         assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(4096, 4096, false)));
-        // 4096 steps: the step limit, so the finer map starts at CHASE_FIRST_STEPS.
+        // Still 2.6% better for twice the steps, and 12x VSV's time: on to 8192 steps.
         rows.push(row(Point::march(4096, 4096, false), 3300.0, 0.0113));
+        assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(8192, 4096, false)));
+        // Under 2% better: the map's texels are the limit, so the finer map starts at CHASE_FIRST_STEPS.
+        rows.push(row(Point::march(8192, 4096, false), 6600.0, 0.0111));
         assert_eq!(next_chase_point(&rows, &maps), Some(Point::march(1024, 8192, false)));
         rows.push(row(Point::march(1024, 8192, false), 1150.0, 0.00976));
         assert_eq!(next_chase_point(&rows, &maps), None, "as accurate as VSV: done");
@@ -1072,6 +1092,27 @@ mod tests {
         assert_eq!(next_chase_point(&limited, &maps), Some(Point::march(1024, 8192, false)));
         // Nothing to chase without a VSV point.
         assert_eq!(next_chase_point(&limited[1..], &maps), None);
+        // A march limited by its steps (the bunny on the H200): the steps go on doubling past
+        // 4096 while the march costs under CHASE_MAX_RATIO times VSV's frame...
+        let bunny = row(Point::grid(Method::Vsv, 2048, 512, 768, 2048), 3.66, 0.00030);
+        let mut steps = vec![
+            bunny.clone(),
+            row(Point::march(2048, 4096, false), 23.0, 0.000465),
+            row(Point::march(4096, 4096, false), 34.9, 0.000403),
+        ];
+        assert_eq!(next_chase_point(&steps, &[4096]), Some(Point::march(8192, 4096, false)));
+        // ...and the map is spent once its march takes that much (73.2 ms here): the lower bound
+        // is then at least 20x.
+        steps.push(row(Point::march(8192, 4096, false), 74.0, 0.000350));
+        assert_eq!(next_chase_point(&steps, &[4096]), None);
+        assert_eq!(next_chase_point(&steps, &maps), Some(Point::march(1024, 8192, false)));
+        // The steps' own limit.
+        let top = vec![
+            bunny,
+            row(Point::march(CHASE_MAX_STEPS / 2, 4096, false), 30.0, 0.00050),
+            row(Point::march(CHASE_MAX_STEPS, 4096, false), 60.0, 0.00040),
+        ];
+        assert_eq!(next_chase_point(&top, &[4096]), None);
     }
 
     #[test]
