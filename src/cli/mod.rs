@@ -663,9 +663,13 @@ pub fn compare(a: &Path, b: &Path, json: bool, diff: Option<&Path>, gain: f32) -
     } else {
         let mut line = format!("{} vs {}: {stats}", a.display(), b.display());
         if let Some(w) = &worst {
-            let parts: Vec<String> =
-                WORST_FRACTIONS.iter().zip(w).map(|(f, s)| format!("{} {:.0}%", percent(*f), s * 100.0)).collect();
-            line += &format!(" | squared error in the worst pixels: {}", parts.join(", "));
+            let fractions: Vec<String> = WORST_FRACTIONS.iter().map(|f| percent(*f)).collect();
+            let shares: Vec<String> = w.iter().map(|s| format!("{:.0}%", s * 100.0)).collect();
+            line += &format!(
+                " | the worst {} of the pixels hold {} of the squared error",
+                fractions.join(" / "),
+                shares.join(" / ")
+            );
         }
         println!("{}", escape_controls(&line));
     }
