@@ -156,7 +156,7 @@ fn numeric_flags_are_range_checked_by_name() {
     }
     // The ranges are in the help text, taken from params.rs.
     let help = String::from_utf8_lossy(&epivox(&["render", "--help"], &[]).stdout).into_owned();
-    for r in ["[range: 2..=65536", "[range: 1..=4096]", "[range: 64..=16384 texels]", "[range: 1..=16384 pixels]"] {
+    for r in ["[range: 2..=65536", "[range: 1..=32768]", "[range: 64..=16384 texels]", "[range: 1..=16384 pixels]"] {
         assert!(help.contains(r), "render --help lacks {r}: {help}");
     }
 }
