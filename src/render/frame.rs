@@ -63,23 +63,18 @@ pub struct FrameUniforms {
 /// `FrameUniforms::epipole.x` when no pixel lies near the light's direction.
 pub const NO_EPIPOLE: f32 = 3.0e38;
 
-/// The epipole ([`FrameUniforms::epipole`]): the light's axis `a` (unit, from the eye) against
-/// the camera basis `r, u, f` and the tangents of the half fields of view.
-fn epipole(a: glam::DVec3, basis: [[f64; 3]; 3], tan_x: f64, tan_y: f64, width: u32, height: u32) -> Vec4 {
-    let [r, u, f] = basis.map(glam::DVec3::from);
-    let depth = a.dot(f);
+/// The epipole ([`FrameUniforms::epipole`]): the pixel whose ray is the light's axis `a` (unit,
+/// from the eye), split into whole pixels and the fraction.
+fn epipole(a: glam::DVec3, cam: &crate::scene::Camera, width: u32, height: u32) -> Vec4 {
     // Past 2^22 pixels the split would lose the fraction; no pixel is near such a point anyway.
     let far = 4_194_304.0;
-    if depth <= 1e-9 {
-        return Vec4::new(NO_EPIPOLE, 0.0, 0.0, 0.0);
+    match cam.pixel_of_dir_f64(a, width, height) {
+        Some((x, y)) if x.abs() < far && y.abs() < far => {
+            let (xi, yi) = (x.floor(), y.floor());
+            Vec4::new(xi as f32, yi as f32, (x - xi) as f32, (y - yi) as f32)
+        }
+        _ => Vec4::new(NO_EPIPOLE, 0.0, 0.0, 0.0),
     }
-    let x = (a.dot(r) / depth / tan_x + 1.0) * 0.5 * width as f64 - 0.5;
-    let y = (1.0 - a.dot(u) / depth / tan_y) * 0.5 * height as f64 - 0.5;
-    if !(x.abs() < far && y.abs() < far) {
-        return Vec4::new(NO_EPIPOLE, 0.0, 0.0, 0.0);
-    }
-    let (xi, yi) = (x.floor(), y.floor());
-    Vec4::new(xi as f32, yi as f32, (x - xi) as f32, (y - yi) as f32)
 }
 
 /// Everything derived from the scene for one frame on the CPU.
@@ -199,8 +194,6 @@ impl FrameSetup {
             mapping.spacing = BinSpacing::UniformAngle;
         }
         let th = (cam.fov_y_deg.to_radians() * 0.5).tan();
-        // As Camera::pixel_dir_f64 has it, for the epipole.
-        let th64 = ((cam.fov_y_deg as f64).to_radians() * 0.5).tan();
         let tw = th * aspect as f32;
         let v3 = |a: [f64; 3], w: f32| Vec4::new(a[0] as f32, a[1] as f32, a[2] as f32, w);
         let (light, power) = match scene.light {
@@ -244,7 +237,7 @@ impl FrameSetup {
             image: UVec4::new(width, height, 0, flags),
             table: UVec4::new(TABLE_ROWS, TABLE_COLS, cartesian_axis, 0),
             work: UVec4::new(1, 1, 0, 0),
-            epipole: epipole(frame.axis, [r, u, f], th64 * aspect, th64, width, height),
+            epipole: epipole(frame.axis, cam, width, height),
         };
         Ok(FrameSetup { uniforms, frame, mapping, width, height, method })
     }

@@ -216,6 +216,21 @@ impl Camera {
         (f + r * ndc_x + u * ndc_y).normalize()
     }
 
+    /// The continuous pixel position whose ray ([`Camera::pixel_dir_f64`]) runs along `dir`: its
+    /// inverse. `None` when `dir` points away from the camera (or along its image plane).
+    pub fn pixel_of_dir_f64(&self, dir: glam::DVec3, width: u32, height: u32) -> Option<(f64, f64)> {
+        let [r, u, f] = self.basis_f64().map(glam::DVec3::from);
+        let z = dir.dot(f);
+        if z <= 1e-9 {
+            return None;
+        }
+        let th = ((self.fov_y_deg as f64).to_radians() * 0.5).tan();
+        let tw = th * width as f64 / height as f64;
+        let nx = dir.dot(r) / z / tw;
+        let ny = dir.dot(u) / z / th;
+        Some(((nx + 1.0) * 0.5 * width as f64 - 0.5, (1.0 - ny) * 0.5 * height as f64 - 0.5))
+    }
+
     /// A camera that frames `bounds` from a pleasant three-quarter view.
     pub fn framing(bounds: &Aabb) -> Camera {
         let c = bounds.center();

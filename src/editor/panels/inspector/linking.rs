@@ -5,7 +5,6 @@
 
 use crate::render::{FrameSetup, Method};
 use crate::scene::Camera;
-use glam::DVec3;
 
 /// The (plane, ray) of a viewport pixel (continuous coordinates), when it lies inside the grid.
 pub fn cell_of_pixel(setup: &FrameSetup, camera: &Camera, px: f64, py: f64) -> Option<(f64, f64)> {
@@ -25,22 +24,7 @@ pub fn cell_of_pixel(setup: &FrameSetup, camera: &Camera, px: f64, py: f64) -> O
 pub fn pixel_of_cell(setup: &FrameSetup, camera: &Camera, plane: f64, ray: f64) -> Option<(f64, f64)> {
     let m = &setup.mapping;
     let dir = setup.frame.dir(m.phi_of_plane(plane), m.gamma_of_ray(ray));
-    pixel_of_dir(camera, dir, setup.width, setup.height)
-}
-
-/// Inverse of [`Camera::pixel_dir_f64`].
-pub fn pixel_of_dir(camera: &Camera, dir: DVec3, width: u32, height: u32) -> Option<(f64, f64)> {
-    let [r, u, f] = camera.basis_f64();
-    let (r, u, f) = (DVec3::from(r), DVec3::from(u), DVec3::from(f));
-    let z = dir.dot(f);
-    if z <= 1e-9 {
-        return None;
-    }
-    let th = ((camera.fov_y_deg as f64).to_radians() * 0.5).tan();
-    let tw = th * width as f64 / height as f64;
-    let nx = dir.dot(r) / z / tw;
-    let ny = dir.dot(u) / z / th;
-    Some(((nx + 1.0) * 0.5 * width as f64 - 0.5, (1.0 - ny) * 0.5 * height as f64 - 0.5))
+    camera.pixel_of_dir_f64(dir, setup.width, setup.height)
 }
 
 #[cfg(test)]
