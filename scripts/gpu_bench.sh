@@ -10,7 +10,9 @@
 # 512x512 classroom bench also measures grids larger than llvmpipe's 128 MiB binding allows
 # (`--grid`): on the software driver every 100 MB grid shape stops near 1% (docs/results.md,
 # "Where the classroom's remaining error lies"), and a GPU can show whether more bits get VSV
-# below the 1024-step march's 0.76% (the chase then finds a finer march to compare with).
+# below the 1024-step march's 0.76% (the chase then finds a finer march to compare with). The
+# renders, the 512x512 classroom bench, the bunny and the scaling sweep run once more with VSV's
+# surface shadows from the shadow volume (`--surface-shadows grid`: no shadow map in its frames).
 #
 #   scripts/gpu_bench.sh OUT_DIR [EPIVOX] [CACHE_DIR] [SECONDS]
 #
@@ -85,6 +87,14 @@ for v in flat no_normal; do
     EPIVOX_SHADER_DIR=$out/shaders_$v step "render_surface_$v" "$epivox" render "$classroom" \
         --size 1024x1024 --json --out "$out/surface_$v.png"
 done
+# VSV with its surface shadows from the shadow volume (`--surface-shadows grid`): its frames draw
+# no shadow map, which on the H200 was 1.4 of the classroom's 2.3 ms at 512x512 (session 24's run).
+step render_default_grid_shadows "$epivox" render "$classroom" --size 1024x1024 --json \
+    --surface-shadows grid --out "$out/classroom_1024_grid_shadows.png"
+step render_paper_grid_shadows "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
+    --surface-shadows grid --out "$out/classroom_1024_grid1024x1024x256_grid_shadows.png"
+step classroom512_grid_shadows "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
+    --surface-shadows grid --grid 2048x512x1536 --cache-dir "$cache" --out "$out/classroom512_grid_shadows"
 step classroom512 "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
     --grid 4096x512x768 --grid 2048x1024x768 --grid 2048x512x1536 --grid 4096x1024x1024 \
     --cache-dir "$cache" --out "$out/classroom512"
@@ -92,10 +102,14 @@ step classroom512_threads "$epivox" bench "$classroom" --size 512x512 --frames 5
     --cache-dir "$cache" --out "$out/classroom512_threads"
 [[ -f $bunny ]] && step bunny "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
     --cache-dir "$cache" --out "$out/bunny"
+[[ -f $bunny ]] && step bunny_grid_shadows "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
+    --surface-shadows grid --cache-dir "$cache" --out "$out/bunny_grid_shadows"
 step classroom1024 "$epivox" bench "$classroom" --size 1024x1024 --frames 5 --rounds 3 --no-scaling \
     --cache-dir "$cache" --out "$out/classroom1024"
 step scaling "$epivox" bench "$classroom" --size 512x512 --frames 3 --cache-dir "$cache" \
     --out "$out/scaling"
+step scaling_grid_shadows "$epivox" bench "$classroom" --size 512x512 --frames 3 --cache-dir "$cache" \
+    --surface-shadows grid --out "$out/scaling_grid_shadows"
 
 # The lines a reader wants first: the adapter and each bench's ratio.
 grep -h '"adapter"' "$out"/render_*.log 2>/dev/null | head -1

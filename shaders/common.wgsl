@@ -34,6 +34,7 @@ override QUAD_RAYS: bool = true;    // every grid ray starts on four words (bins
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
+const FLAG_GRID_SHADOWS: u32 = 32u; // surface shadows from the shadow volume: Integrate writes them, no shadow map
 
 struct Frame {
     // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.

@@ -3,8 +3,10 @@
 //   L_pixel = L_surface * T_view + L_scatter
 //   T_view = exp(-sigma_t * t_s)            (point light: the medium is unbounded)
 //          = exp(-sigma_t * |[0, t_s] ∩ box|) (directional light: the medium fills the box)
-//   L_surface = albedo / pi * max(cos theta_i, 0) * V_shadow_map * E_in   (n faces the eye: an
-//   opaque sheet lit from behind stays dark in front)
+//   L_surface = albedo / pi * max(cos theta_i, 0) * V * E_in   (n faces the eye: an opaque sheet
+//   lit from behind stays dark in front)
+//   V: the shadow map's 2x2 filtered test, or with FLAG_GRID_SHADOWS (a VSV frame) the shadow
+//   volume's, which Integrate wrote in the scattered light's alpha (integrate.wgsl)
 //   point:        E_in = I0 * exp(-sigma_t d) / (d^2 + r^2)
 //   directional:  E_in = E0 * exp(-sigma_t l(P)),  l = path toward the light inside the medium box
 //
@@ -57,7 +59,9 @@ fn slope_bias(texel: f32, cos_i: f32) -> f32 {
 }
 
 // Direct light leaving the surface point p toward the eye (before the view path's attenuation).
-fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32) -> vec3f {
+// `grid_vis`: the visibility Integrate read from the shadow volume (FLAG_GRID_SHADOWS), which then
+// stands for the map's.
+fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32, grid_vis: f32) -> vec3f {
     // Lit from behind (or edge-on): dark in front. The shadow lookups are skipped too.
     if (cos_i <= 0.0) { return vec3f(0.0); }
     // A texel of the map spans params.y scene units (directional) or params.y per unit of distance
@@ -78,7 +82,9 @@ fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32) -> vec3f {
         }
         e_in = f.light_power.xyz * exp(-f.sigma_t.xyz * l);
     }
-    return albedo / PI * cos_i * e_in * visibility(p, slope_bias(texel, cos_i));
+    var vis = grid_vis;
+    if ((f.image.w & FLAG_GRID_SHADOWS) == 0u) { vis = visibility(p, slope_bias(texel, cos_i)); }
+    return albedo / PI * cos_i * e_in * vis;
 }
 
 @compute @workgroup_size(8, 8)
@@ -87,8 +93,8 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
     let p = vec2i(id.xy);
     let t = textureLoad(distance, p, 0).x;
-    let s = textureLoad(scatter, p, 0).xyz;
-    var c = s;
+    let s = textureLoad(scatter, p, 0);
+    var c = s.xyz;
     if (t >= 0.0) {
         let v = pixel_dir(f, vec2f(id.xy));
         var path = t;
@@ -97,7 +103,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             path = max(0.0, min(span.y, t) - span.x);
         }
         let m = textureLoad(material, p, 0);
-        c += surface_light(f.eye.xyz + v * t, m.xyz, m.w) * exp(-f.sigma_t.xyz * path);
+        c += surface_light(f.eye.xyz + v * t, m.xyz, m.w, s.w) * exp(-f.sigma_t.xyz * path);
     }
     textureStore(hdr, p, vec4f(c, 1.0));
 }

@@ -35,7 +35,10 @@
 @group(0) @binding(1) var<storage, read> grid: array<vec4u>;
 @group(0) @binding(2) var<storage, read> table: array<vec4f>;
 @group(0) @binding(3) var distance: texture_2d<f32>;
+// rgb: the scattered light; a: the surface's visibility of the light (FLAG_GRID_SHADOWS), else 1.
 @group(0) @binding(4) var scatter_out: texture_storage_2d<rgba32float, write>;
+// Surface's (albedo, cos theta_i): the slope of the surface toward the light, for its shadow's bias.
+@group(0) @binding(5) var material: texture_2d<f32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -331,6 +334,144 @@ fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32)
     return max(z_of_bin(f, bin_coord(f, z) - 0.75), z_start);
 }
 
+// ---- surface shadows from the shadow volume (FLAG_GRID_SHADOWS) ------------------------------
+//
+// The surface point P at the end of the view ray sees the light where no caster lies on its light
+// ray before it, which is what the shadow volume holds. V = the lit fraction of the bins around
+// P's z, blended like the medium's (two planes, two bins: a 2x2 filter, like a shadow map's). Each
+// of the four sample light rays (its plane's centre, its bin's centre z_k) is read on the ray cell
+// before the one holding the point where it meets the surface: the cell's bits hold every caster
+// up to its end (inclusive scan), and the surface's own voxels lie in the cell after.
+//
+// Where it meets the surface: the sample ray against P's tangent plane, whose normal comes from the
+// neighbouring pixels' points (trusted where it reproduces Surface's own cos theta_i), moved a
+// quarter of s toward the light against curvature. Without a normal (an edge, a lone pixel), P's
+// own light ray moved s toward the light, where s = (bin + plane) tan(theta_i) bounds how much
+// nearer the light a sample ray, up to one bin and one plane away, can meet the tangent plane (the
+// slope-scaled bias of a shadow map). A point is placed by its reach: along the axis for a sun (u,
+// so gamma_k = atan2(z_k, u)) and from the light for a point light (d, gamma_k = atan2(d sin psi_k,
+// D - d cos psi_k)). The cost is that of any bias: a caster within the margin plus a cell of P
+// casts no shadow on it. (One bias s for all four samples, with no normal, self-shadowed the
+// occluder's floor: 88% of its lit pixels right against 100%, tests/gpu.rs.)
+//
+// A frame then needs no shadow map at all: on an H200 the sun's 2048^2 map was 1.4 of the
+// classroom's 2.3 ms at 512x512 (docs/results.md, session 25).
+
+// The surface point the four samples are read around: its position and normal (toward the eye;
+// `exact` where its neighbours gave one), the conservative reach (P's own, moved s toward the
+// light) and s.
+struct SurfacePoint {
+    pos: vec3f,
+    n: vec3f,
+    exact: bool,
+    reach: f32,
+    s: f32,
+}
+
+var<private> sp: SurfacePoint;
+
+// 1 where bin j of plane x's light ray, read on the cell before its point at its reach, is lit.
+// With the surface's normal, the reach is where the sample ray meets the surface's tangent plane
+// (clamped to P's own reach +- s, the bound above), moved MARGIN s toward the light.
+fn sample_lit(x: u32, j: u32, offset: f32) -> f32 {
+    let z = z_of_bin(f, f32(j) + 0.5 + offset);
+    var reach = sp.reach;
+    if (sp.exact) {
+        let phi = phi_of_plane(f, f32(x) + 0.5);
+        let m = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
+        let a = f.axis.xyz;
+        if (is_point_light()) {
+            let dir = m * sin(z) - a * cos(z);
+            let nd = dot(sp.n, dir);
+            if (nd < -1e-6) {
+                let d = dot(sp.n, sp.pos - f.light.xyz) / nd;
+                let d0 = length(f.light.xyz - sp.pos);
+                reach = clamp(d, d0 - sp.s, d0 + sp.s) - MARGIN * sp.s;
+            }
+        } else {
+            let u = dot(sp.pos - f.eye.xyz, a);
+            let q = f.eye.xyz + a * u + m * z;
+            let lambda = -dot(sp.n, q - sp.pos) / max(dot(sp.n, a), 1e-6);
+            reach = u + clamp(lambda, -sp.s, sp.s) + MARGIN * sp.s;
+        }
+    }
+    var g = atan2(z, reach);
+    if (is_point_light()) { g = atan2(reach * sin(z), f.axis.w - reach * cos(z)); }
+    // Before the first cell: only casters outside the rays' range (clamped into cell 0, with the
+    // surface's own voxels) could shadow the point, and they cannot be told apart: taken as lit.
+    let y = i32(floor(ray_coord(f, g))) - 1;
+    if (y < 0) { return 1.0; }
+    let w = word(ray_offset(f, x, u32(min(y, i32(f.grid.y) - 1))) + j / 32u);
+    return f32(1u - ((w >> (j % 32u)) & 1u));
+}
+
+// Against curvature: the classroom's whole image at 0, 0.1, 0.25 and 0.5: 67.4, 66.7, 66.7, 67.1%.
+const MARGIN: f32 = 0.25;
+
+// One plane's lit fraction at bin coordinate b: its two bin samples around b, blended linearly.
+fn plane_lit(x: u32, b: f32) -> f32 {
+    let offset = bin_offset(x);
+    let u = b - 0.5 - offset;
+    let j = floor(u);
+    let top = f32(f.grid.z - 1u);
+    let lo = u32(clamp(j, 0.0, top));
+    let hi = u32(clamp(j + 1.0, 0.0, top));
+    return mix(sample_lit(x, lo, offset), sample_lit(x, hi, offset), u - j);
+}
+
+// The step from pixel p's point to its neighbour along `step` (either side: the one nearer in
+// distance, which is on the same surface unless both are off it), and 1 in w; 0 where neither
+// neighbour sees a surface.
+fn neighbour_step(p: vec2i, step: vec2i, pos: vec3f, t_s: f32) -> vec4f {
+    var best = vec4f(0.0);
+    var gap = 3.4e38;
+    for (var k = -1; k <= 1; k += 2) {
+        let q = p + step * k;
+        if (any(q < vec2i(0)) || any(q >= vec2i(f.image.xy))) { continue; }
+        let t = textureLoad(distance, q, 0).x;
+        if (t < 0.0 || abs(t - t_s) >= gap) { continue; }
+        gap = abs(t - t_s);
+        best = vec4f((f.eye.xyz + pixel_dir(f, vec2f(q)) * t - pos) * f32(k), 1.0);
+    }
+    return best;
+}
+
+fn surface_visibility(p: vec2i, v: vec3f, t_s: f32, gamma: f32, cos_i: f32, x: vec2u, weights: vec2f) -> f32 {
+    // Lit from behind: Composite draws nothing there.
+    if (cos_i <= 0.0) { return 0.0; }
+    let b = bin_coord(f, z_along(f, gamma, t_s));
+    // No caster reaches outside the bins' range (Ranges made it hold every visible surface).
+    if (b < -0.25 || b > f32(f.grid.z) + 0.25) { return 1.0; }
+    let pos = f.eye.xyz + v * t_s;
+    // A bin and a plane across the light ray at P, in scene units (z is an angle at a point light).
+    var across = abs(z_of_bin(f, b + 0.5) - z_of_bin(f, b - 0.5));
+    var d = 0.0;
+    var w = f.light.xyz;
+    if (is_point_light()) {
+        d = length(f.light.xyz - pos);
+        w = (f.light.xyz - pos) / max(d, 1e-30);
+        across *= d;
+    }
+    across += t_s * sin(gamma) * f.b2.w / f32(f.grid.x);
+    // tan(theta_i), capped where the surface grazes the light (cos < 1/16: its light is that dim).
+    let c = max(cos_i, 0.0625);
+    let s = across * sqrt(max(1.0 - c * c, 0.0)) / c;
+    var reach = t_s * cos(gamma) + s;
+    if (is_point_light()) { reach = max(d - s, 0.0); }
+    // The normal from the neighbours' points; trusted where it gives the surface's own cos theta_i
+    // (a neighbour across an edge would not).
+    let dx = neighbour_step(p, vec2i(1, 0), pos, t_s);
+    let dy = neighbour_step(p, vec2i(0, 1), pos, t_s);
+    var n = normalize(cross(dx.xyz, dy.xyz));
+    if (dot(n, v) > 0.0) { n = -n; }
+    let exact = dx.w > 0.0 && dy.w > 0.0 && cos_i > 0.0625 && abs(dot(n, w) - cos_i) < 0.05;
+    sp = SurfacePoint(pos, n, exact, reach, s);
+    var vis = 0.0;
+    if (weights.x > 0.0) { vis += weights.x * plane_lit(x.x, b); }
+    if (weights.y > 0.0) { vis += weights.y * plane_lit(x.y, b); }
+    return vis;
+}
+
 // ---- per pixel -----------------------------------------------------------------------------
 
 @compute @workgroup_size(8, 8)
@@ -415,5 +556,10 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));
         }
     }
-    textureStore(scatter_out, vec2i(id.xy), vec4f(l, 1.0));
+    var vis = 1.0;
+    if ((f.image.w & FLAG_GRID_SHADOWS) != 0u && t_s >= 0.0) {
+        let cos_i = textureLoad(material, vec2i(id.xy), 0).w;
+        vis = surface_visibility(vec2i(id.xy), v, t_s, gamma, cos_i, vec2u(u32(x0), u32(x1)), weights);
+    }
+    textureStore(scatter_out, vec2i(id.xy), vec4f(l, vis));
 }

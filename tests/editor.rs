@@ -730,3 +730,26 @@ fn broken_shaders_at_start_fall_back_to_the_embedded_ones() {
     std::fs::write(shaders.join("scan.wgsl"), EMBEDDED.iter().find(|(n, _)| *n == "scan.wgsl").unwrap().1).unwrap();
     assert!(wait_for(&mut h, Duration::from_secs(60), |e| e.shader_error().is_none()));
 }
+
+/// The toolbar's "shadows from grid" (VSV's surface shadows from the shadow volume): a click
+/// renders again without a shadow map, and the picture stays the same but for the shadows' edges.
+#[test]
+fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
+    use epivox::render::Pass;
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let (before, ..) = viewport_pixels(&mut h);
+    let shown = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.passes.clone();
+    assert!(shown(&h).contains(&Pass::ShadowMap), "the default frame drew no shadow map");
+    h.get_by_label("shadows from grid").click();
+    h.run();
+    assert!(h.state().ed().grid_shadows(), "the click did not reach the view");
+    let (after, ..) = viewport_pixels(&mut h);
+    let passes = shown(&h);
+    assert!(!passes.contains(&Pass::ShadowMap), "the grid-shadowed frame drew a map: {passes:?}");
+    // Measured: 6.1 of 255. This editor's grid has 64 bins, so the grating's shadows on the floor
+    // step over several pixels at their edges (`epivox render --grid 128x128x64 --surface-shadows
+    // grid` shows it); the lit floor itself, a quarter of the view, would move the mean by far more.
+    let diff = mean_diff(&before, &after);
+    assert!(diff > 0.0 && diff < 10.0, "the picture changed by {diff:.2} of 255");
+}

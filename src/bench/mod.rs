@@ -318,7 +318,8 @@ pub fn resolution_sweep(quick: bool) -> Vec<u32> {
     }
 }
 
-/// Passes every method runs; the rest are the method's own ("volume" time).
+/// Passes every method runs (but a VSV frame with grid shadows, which draws no map:
+/// `Renderer::grid_shadows`); the rest are the method's own ("volume" time).
 pub const SHARED_PASSES: [Pass; 4] = [Pass::Surface, Pass::ShadowFit, Pass::ShadowMap, Pass::Composite];
 
 /// Median times of one point.
@@ -716,6 +717,13 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
             .into()
     } else {
         "Scan: a thread per column (scan.wgsl, scan_words.wgsl; `--scan threads`, a CPU adapter's default)".into()
+    });
+    notes.push(if renderer.grid_shadows {
+        "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw no shadow map, \
+         and `final` shows what that does to the surfaces"
+            .into()
+    } else {
+        "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)".into()
     });
     let mut points = error_sweep(opts.quick);
     add_grids(&mut points, &opts.extra_grids);

@@ -343,7 +343,8 @@ pub fn markdown(r: &BenchResults) -> String {
          mean reference value; PSNR with the brightest reference value as peak); `final` is the relative \
          RMSE of the whole image. `volume` is the method's own passes (VSV and Cartesian: every pass but the \
          four below; raymarch: raymarch); `total` adds the surface, the sun's shadow-map fit, the shadow map \
-         and composite passes every method runs. ● marks a point on its method's Pareto front.\n"
+         and composite passes every method runs (VSV with `--surface-shadows grid` draws no map: the notes \
+         say which). ● marks a point on its method's Pareto front.\n"
     );
 
     let _ = writeln!(s, "## Error against time\n\n![error against time](error_vs_time.png)\n");

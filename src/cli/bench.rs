@@ -49,6 +49,10 @@ pub struct BenchArgs {
     /// hardware GPU, threads on a CPU adapter: `Renderer::scan_columns`].
     #[arg(long, value_enum)]
     pub scan: Option<super::ScanBy>,
+    /// Where VSV's surface shadows come from [default: map]; the raymarch baseline's always come
+    /// from the shadow map.
+    #[arg(long, value_enum)]
+    pub surface_shadows: Option<super::SurfaceShadows>,
     #[arg(long, value_parser = super::parse_samples, help = super::samples_help())]
     pub samples: Option<usize>,
     #[arg(long = "grid", value_name = "GRID", value_parser = super::parse_grid, help = format!(
@@ -96,6 +100,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
     super::ScanBy::apply(args.scan, &mut renderer);
+    super::SurfaceShadows::apply(args.surface_shadows, &mut renderer);
     eprintln!(
         "benchmarking {} ({} triangles) at {}x{} on {}",
         scene.name,

@@ -84,6 +84,25 @@ impl ScanBy {
     }
 }
 
+/// Where a VSV frame's surface shadows come from (`Renderer::grid_shadows`).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
+pub enum SurfaceShadows {
+    /// The shadow volume itself (integrate.wgsl, "surface shadows"): no shadow map is drawn, and
+    /// the shadows are as sharp as the grid's bins.
+    Grid,
+    /// The shadow map, like the baseline's surfaces: the default.
+    Map,
+}
+
+impl SurfaceShadows {
+    /// Sets the renderer's choice when one was given, else keeps its default.
+    pub fn apply(choice: Option<SurfaceShadows>, renderer: &mut Renderer) {
+        if let Some(from) = choice {
+            renderer.grid_shadows = from == SurfaceShadows::Grid;
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
 pub enum Method {
     /// Voxelized Epipolar Shadow Volumes on the GPU.
@@ -163,6 +182,10 @@ pub struct RenderArgs {
     /// GPU, threads on a CPU adapter: `Renderer::scan_columns`].
     #[arg(long, value_enum)]
     pub scan: Option<ScanBy>,
+    /// Where VSV's surface shadows come from [default: map]. The raymarch baseline's always come
+    /// from the shadow map.
+    #[arg(long, value_enum)]
+    pub surface_shadows: Option<SurfaceShadows>,
     #[arg(long, value_parser = parse_samples, help = samples_help())]
     pub samples: Option<usize>,
     #[arg(long, value_parser = parse_steps,
@@ -472,6 +495,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
             ScanBy::apply(args.scan, &mut renderer);
+            SurfaceShadows::apply(args.surface_shadows, &mut renderer);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;

@@ -357,6 +357,10 @@ impl Editor {
     pub fn method(&self) -> Method {
         self.view.method
     }
+    /// Whether VSV's surface shadows come from the shadow volume (`Renderer::grid_shadows`).
+    pub fn grid_shadows(&self) -> bool {
+        self.view.grid_shadows
+    }
     /// The newest render request's generation (changes whenever the picture must be redrawn).
     pub fn generation(&self) -> u64 {
         self.jobs.render.generation

@@ -72,6 +72,7 @@ impl Editor {
                     view.shadow_map = s;
                 }
             }
+            Command::SetGridShadows(on) => view.grid_shadows = on,
             Command::SetRenderScale(s) => view.render_scale = s.clamp(0.1, 1.0),
             Command::SetCameraMode(m) => view.camera.mode = m,
             Command::SetExposureMode(m) => view.exposure_mode = m,
@@ -158,6 +159,7 @@ impl Editor {
             surface_only: view.mode == ViewMode::Surface,
             method: view.method,
             shadow_map: view.shadow_map,
+            grid_shadows: view.grid_shadows,
             width,
             height,
             scene_generation: doc.scene_generation,
@@ -186,6 +188,7 @@ impl Editor {
             height,
             method: content.method,
             shadow_map: content.shadow_map,
+            grid_shadows: content.grid_shadows,
             interactive,
             progressive: !forcing,
             grids: content.grids,

@@ -44,6 +44,8 @@ pub enum Command {
     SetMethod(Method),
     /// Shadow-map texels per side (surface shadows, and the ray-marching baseline's visibility).
     SetShadowMap(u32),
+    /// VSV's surface shadows from the shadow volume (true) or the shadow map.
+    SetGridShadows(bool),
     /// Fraction of the viewport's pixels the renderer draws at (1 = every pixel).
     SetRenderScale(f32),
     SetCameraMode(CameraMode),

@@ -106,6 +106,9 @@ pub struct View {
     pub raymarch_steps: u32,
     /// Shadow-map texels per side (surface shadows, and the baseline's visibility).
     pub shadow_map: u32,
+    /// VSV's surface shadows from the shadow volume, with no shadow map drawn
+    /// (`Renderer::grid_shadows`).
+    pub grid_shadows: bool,
     /// Fraction of the viewport's pixels a full-quality frame has (1 = every pixel).
     pub render_scale: f32,
     pub camera: CameraController,
@@ -123,6 +126,7 @@ impl Default for View {
             method: Method::Vsv,
             raymarch_steps: Baseline::default().steps,
             shadow_map: Baseline::default().shadow_map,
+            grid_shadows: false,
             render_scale: 1.0,
             camera: CameraController::default(),
             exposure_mode: ExposureMode::default(),

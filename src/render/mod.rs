@@ -367,6 +367,16 @@ pub struct Renderer {
     /// ([`ShadowFit`]; on by default, off only to compare, `tests/shadow_fit.rs`). The camera then
     /// joins the map's inputs: a camera move draws the sun's map again.
     pub fit_shadow_map: bool,
+    /// VSV frames take the surfaces' shadows from the shadow volume instead of a shadow map
+    /// (Integrate reads them from the same bits: `integrate.wgsl`, "surface shadows"), and draw no
+    /// shadow map at all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The
+    /// scattered light is the same; the surfaces' shadows are as sharp as the grid's bins (the
+    /// classroom's whole image at 512x512 and the default grid: 66.7% relative RMSE against the
+    /// reference, where the 2048 map gives 50.6% and a 1024 map 78%; docs/results.md, session 25).
+    /// Off by default (quality first); on, a GPU that rasterizes on few units saves the map
+    /// (`--surface-shadows grid`). A frame with nothing to scatter has no shadow volume and uses
+    /// the map either way.
+    pub grid_shadows: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
@@ -438,6 +448,7 @@ impl Renderer {
             scan_columns,
             occlusion_culling: true,
             fit_shadow_map: true,
+            grid_shadows: false,
             last_fitted: false,
             pyramid_to_build: None,
             reuse_unchanged: true,
@@ -678,6 +689,7 @@ impl Renderer {
             table: p.scatter_table.table.as_entire_binding(),
             distance: R::TextureView(&t.distance),
             scatter_out: R::TextureView(&t.scatter_view),
+            material: R::TextureView(&t.material),
         };
         p.integrate.bind(d, integrate);
         let march = p.raymarch.uniforms.clone();
@@ -718,6 +730,7 @@ impl Renderer {
             }));
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
+        self.flag_grid_shadows(scene, &mut setup);
         let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
@@ -753,7 +766,8 @@ impl Renderer {
     /// would make the frame wait for its rasterization). Cull and the map's own list (every
     /// method's; only from a pyramid of the same matrix) leave the hidden triangles out.
     fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
-        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point();
+        // (A frame that draws no map has no pyramid to make.)
+        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point() && !Self::grid_shadowed(setup);
         let key = match (&self.geometry, occlusion) {
             (Some(g), true) => Some(MapInputs::new(
                 g.fingerprint,
@@ -777,7 +791,20 @@ impl Renderer {
     /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
     /// with [`Renderer::fit_shadow_map`] on.
     fn fits_map(&self, setup: &FrameSetup) -> bool {
-        self.fit_shadow_map && !setup.frame.is_point()
+        self.fit_shadow_map && !setup.frame.is_point() && !Self::grid_shadowed(setup)
+    }
+
+    /// Marks a VSV frame that scatters to take its surface shadows from the shadow volume
+    /// ([`Renderer::grid_shadows`]).
+    fn flag_grid_shadows(&self, scene: &Scene, setup: &mut FrameSetup) {
+        if self.grid_shadows && setup.method == Method::Vsv && scene.needs_scattering() {
+            setup.uniforms.image.w |= frame::FLAG_GRID_SHADOWS;
+        }
+    }
+
+    /// Whether the frame's surface shadows come from the shadow volume: it draws no shadow map.
+    fn grid_shadowed(setup: &FrameSetup) -> bool {
+        setup.uniforms.image.w & frame::FLAG_GRID_SHADOWS != 0
     }
 
     /// Whether a frame of `scene` at `width x height` with `method` would take the shadow map, the
@@ -797,6 +824,7 @@ impl Renderer {
             return false;
         }
         let Ok(mut setup) = FrameSetup::with_pruning(scene, width, height, method, self.prune) else { return false };
+        self.flag_grid_shadows(scene, &mut setup);
         if self.variant != Some(setup.variant(&scene.medium.phase)) {
             return false;
         }
@@ -818,13 +846,15 @@ impl Renderer {
     ) -> Result<FrameInfo, RenderError> {
         let Prepared { setup, variant: v, key, faces, face_count } = self.prepare(scene, width, height, method)?;
         let fitted = self.fits_map(&setup);
+        let draws_map = !Self::grid_shadowed(&setup);
         // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
         // results are still in the targets, the shadow map and the grid. Or only the map's inputs
         // are the same (the camera moved): the map is still in its texture.
         let drawn = self.drawn.take().filter(|_| self.reuse_unchanged);
         let reuse = drawn.as_ref().is_some_and(|(d, _)| *d == key);
-        let map_reused =
-            !reuse && drawn.as_ref().is_some_and(|(d, ran)| d.map == key.map && ran.contains(&Pass::ShadowMap));
+        let map_reused = draws_map
+            && !reuse
+            && drawn.as_ref().is_some_and(|(d, ran)| d.map == key.map && ran.contains(&Pass::ShadowMap));
         let reused = match drawn {
             Some((_, ran)) if reuse => ran,
             // (A fitted map's fit is one of its inputs, taken over with it.)
@@ -871,7 +901,7 @@ impl Renderer {
             p.surface.record(&mut f.enc, v, g, targets, eye);
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
-            if !map_reused {
+            if draws_map && !map_reused {
                 if fitted {
                     p.shadow_fit.record(&mut f.enc, v, &self.shadow_uniforms, width, height);
                     f.mark(Pass::ShadowFit);

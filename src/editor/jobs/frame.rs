@@ -30,6 +30,8 @@ pub struct FrameRequest {
     pub height: u32,
     pub method: Method,
     pub shadow_map: u32,
+    /// VSV's surface shadows from the shadow volume (`Renderer::grid_shadows`).
+    pub grid_shadows: bool,
     /// The user is dragging or scrolling: previews only; the full frame when this turns false.
     pub interactive: bool,
     /// Previews allowed (off while measuring full frames with `--quit-after-frames`).

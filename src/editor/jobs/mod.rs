@@ -101,6 +101,7 @@ pub struct RenderContent {
     pub surface_only: bool,
     pub method: Method,
     pub shadow_map: u32,
+    pub grid_shadows: bool,
     pub width: u32,
     pub height: u32,
     pub scene_generation: u64,

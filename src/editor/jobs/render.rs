@@ -549,7 +549,8 @@ impl Worker {
         let same_lane = full.stale.is_none()
             && full.scene_generation == Some(r.scene_generation)
             && full.keep_geometry == keeps_grids(r, Quality::Full)
-            && full.renderer.shadow_map_size() == r.shadow_map;
+            && full.renderer.shadow_map_size() == r.shadow_map
+            && full.renderer.grid_shadows == r.grid_shadows;
         if !fits || !same_lane || *generation != r.scene_generation {
             return false;
         }
@@ -597,6 +598,7 @@ impl Worker {
         if let Err(e) = lane.renderer.set_shadow_map_size(shadow_map) {
             return fail(self, e.to_string());
         }
+        lane.renderer.grid_shadows = r.grid_shadows;
         let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,
             Err(e) => return fail(self, e.to_string()),

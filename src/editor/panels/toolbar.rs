@@ -137,6 +137,16 @@ impl Toolbar {
         if size != view.shadow_map {
             out.push(Command::SetShadowMap(size));
         }
+        if view.method == Method::Vsv {
+            let mut on = view.grid_shadows;
+            let r = ui.checkbox(&mut on, "shadows from grid").on_hover_text(
+                "VSV's surface shadows from the shadow volume itself: no shadow map is drawn (faster on a \
+                 GPU), and the shadows are as sharp as the grid's bins",
+            );
+            if r.changed() {
+                out.push(Command::SetGridShadows(on));
+            }
+        }
     }
 
     /// The look's exposure; in the scattered-only view its own, automatic by default.
