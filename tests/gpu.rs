@@ -182,6 +182,34 @@ fn along_the_same_segments(
     (out, distance, along)
 }
 
+/// The surfaces' direct light (`hdr - scatter`) of a GPU frame against the reference's along the
+/// same view segments: more than `bound` of the pixels the reference lights (every channel above
+/// 1e-3) agree to 1%.
+fn assert_lit_surfaces_agree(
+    name: &str,
+    out: &epivox::render::RenderOutput,
+    along: &reference::ReferenceImage,
+    bound: f64,
+) {
+    let (mut lit, mut agree) = (0usize, 0usize);
+    for (((g, gs), e), es) in
+        out.hdr.pixels.iter().zip(&out.scatter.pixels).zip(&along.hdr.pixels).zip(&along.scatter.pixels)
+    {
+        let gpu: [f32; 3] = std::array::from_fn(|c| g[c] - gs[c]);
+        let exact: [f32; 3] = std::array::from_fn(|c| e[c] - es[c]);
+        if exact.iter().all(|&c| c > 1e-3) {
+            lit += 1;
+            if (0..3).all(|c| (gpu[c] - exact[c]).abs() <= 0.01 * exact[c]) {
+                agree += 1;
+            }
+        }
+    }
+    let share = agree as f64 / lit.max(1) as f64;
+    eprintln!("{name}: {agree} of {lit} lit surface pixels agree with the reference to 1% ({:.1}%)", 100.0 * share);
+    assert!(lit > 1000, "{name}: {lit} lit surface pixels");
+    assert!(share > bound, "{name}: {agree} of {lit} lit surface pixels agree to 1%");
+}
+
 /// The view distances a GPU render returns are where the reference's view rays first hit (the sky
 /// is infinite in both) except at the odd pixel whose centre lies within the rasterizer's
 /// sub-pixel precision of a silhouette edge, and along those same view segments the reference
@@ -224,23 +252,7 @@ fn surfaces_are_lit_as_the_reference_lights_them() {
         ("occluder under the sun", occluder_scene(directional), 0.9),
     ] {
         let (out, _, along) = along_the_same_segments(&mut r, &scene, 96, 96);
-        let (mut lit, mut agree) = (0usize, 0usize);
-        for (((g, gs), e), es) in
-            out.hdr.pixels.iter().zip(&out.scatter.pixels).zip(&along.hdr.pixels).zip(&along.scatter.pixels)
-        {
-            let gpu: [f32; 3] = std::array::from_fn(|c| g[c] - gs[c]);
-            let exact: [f32; 3] = std::array::from_fn(|c| e[c] - es[c]);
-            if exact.iter().all(|&c| c > 1e-3) {
-                lit += 1;
-                if (0..3).all(|c| (gpu[c] - exact[c]).abs() <= 0.01 * exact[c]) {
-                    agree += 1;
-                }
-            }
-        }
-        let share = agree as f64 / lit.max(1) as f64;
-        eprintln!("{name}: {agree} of {lit} lit surface pixels agree with the reference to 1% ({:.1}%)", 100.0 * share);
-        assert!(lit > 1000, "{name}: {lit} lit surface pixels");
-        assert!(share > bound, "{name}: {agree} of {lit} lit surface pixels agree to 1%");
+        assert_lit_surfaces_agree(name, &out, &along, bound);
     }
 }
 
@@ -375,10 +387,10 @@ fn the_pixel_next_to_the_light_does_not_hang_on_the_directions_last_bits() {
 /// "surface shadows"): the frame draws no shadow map (no fit, map or pyramid), its scattered light
 /// is the one the map's frame makes, bit for bit (the same casters: the hidden-triangle test, which
 /// reads the map's pyramid, is off for both), and its surfaces are lit as the reference lights them
-/// along the same view segments. Counted as in `surfaces_are_lit_as_the_reference_lights_them`:
-/// the lit pixels that agree to 1%. The grid's shadows are as sharp as its bins (a 2x2 filter over
-/// a bin and a plane, against exact visibility), so pixels near shadow edges differ by design; a
-/// self-shadowed surface (too little bias) or a lost shadow (too much) moves most of them.
+/// along the same view segments (`assert_lit_surfaces_agree`: the lit pixels that agree to 1%).
+/// The grid's shadows are as sharp as its bins (a 2x2 filter over a bin and a plane, against exact
+/// visibility), so pixels near shadow edges differ by design; a self-shadowed surface (too little
+/// bias) or a lost shadow (too much) moves most of them.
 #[test]
 fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
     use epivox::render::Pass;
@@ -403,23 +415,7 @@ fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
             assert!(!out.passes.contains(&pass), "{name}: the grid's frame ran {pass:?}: {:?}", out.passes);
         }
         assert!(out.scatter == map.scatter, "{name}: the scattered light changed with the surfaces' shadows");
-        let (mut lit, mut agree) = (0usize, 0usize);
-        for (((g, gs), e), es) in
-            out.hdr.pixels.iter().zip(&out.scatter.pixels).zip(&along.hdr.pixels).zip(&along.scatter.pixels)
-        {
-            let gpu: [f32; 3] = std::array::from_fn(|c| g[c] - gs[c]);
-            let exact: [f32; 3] = std::array::from_fn(|c| e[c] - es[c]);
-            if exact.iter().all(|&c| c > 1e-3) {
-                lit += 1;
-                if (0..3).all(|c| (gpu[c] - exact[c]).abs() <= 0.01 * exact[c]) {
-                    agree += 1;
-                }
-            }
-        }
-        let share = agree as f64 / lit.max(1) as f64;
-        eprintln!("{name}: {agree} of {lit} lit surface pixels agree with the reference to 1% ({:.1}%)", 100.0 * share);
-        assert!(lit > 1000, "{name}: {lit} lit surface pixels");
-        assert!(share > bound, "{name}: {agree} of {lit} lit surface pixels agree to 1%");
+        assert_lit_surfaces_agree(name, &out, &along, bound);
     }
 }
 
