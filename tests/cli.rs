@@ -175,6 +175,7 @@ fn bad_flags_are_named() {
         (&["--light-dir", "0,0,0"], "direction"),
         (&["--exposure", "99"], "exposure"),
         (&["--method", "cartesian"], "Cartesian"),
+        (&["--surface-shadows", "volume"], "--surface-shadows"),
     ];
     for (flags, needle) in cases {
         let mut args = vec!["render", "--out", out];
@@ -239,4 +240,36 @@ fn compare_names_bad_files() {
     assert!(err.contains("junk.exr"), "{err}");
     let err = fails(&["compare", "/nonexistent/a.exr", junk.to_str().unwrap()], &[]);
     assert!(err.contains("a.exr"), "{err}");
+}
+
+/// `--surface-shadows grid`: the frame draws no shadow map, and `--json` says where the surfaces'
+/// shadows came from (`map` by default, and always for the baseline).
+#[test]
+fn surface_shadows_from_the_grid_draw_no_map_and_json_says_so() {
+    if !has_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("shafts.png");
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let mut args =
+            vec!["render", "--out", png.to_str().unwrap(), "--size", "64x48", "--grid", "128x128x64", "--json"];
+        args.extend_from_slice(extra);
+        let o = epivox(&args, &[]);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        serde_json::from_slice(&o.stdout).expect("stdout is one JSON object")
+    };
+    let passes = |j: &serde_json::Value| j["passes_ms"].as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    let grid = run(&["--surface-shadows", "grid"]);
+    assert_eq!(grid["surface_shadows"], "grid");
+    let map = run(&[]);
+    assert_eq!(map["surface_shadows"], "map");
+    let march = run(&["--method", "raymarch", "--steps", "8", "--surface-shadows", "grid"]);
+    assert_eq!(march["surface_shadows"], "map", "the baseline's visibility is the map's");
+    // (Without timestamps no pass is listed at all.)
+    if !passes(&map).is_empty() {
+        assert!(passes(&map).iter().any(|p| p == "shadow_map"), "{map}");
+        assert!(!passes(&grid).iter().any(|p| p == "shadow_map"), "{grid}");
+        assert!(passes(&march).iter().any(|p| p == "shadow_map"), "{march}");
+    }
 }

@@ -9,7 +9,7 @@
 
 use eframe::egui;
 use eframe::egui_wgpu;
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use epivox::editor::{Command, Editor, EditorOptions, ExposureMode, InspectorMode, Quality, RenderPriority, ViewMode};
 use epivox::gpu::{GpuContext, GpuError, EMBEDDED};
@@ -744,6 +744,9 @@ fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
     h.get_by_label("shadows from grid").click();
     h.run();
     assert!(h.state().ed().grid_shadows(), "the click did not reach the view");
+    // The map's size no longer applies: its picker is disabled.
+    let picker = |h: &Harness<'static, App>| h.get_by_label("shadow map").accesskit_node().is_disabled();
+    assert!(picker(&h), "the shadow-map size is still offered with the shadows from the grid");
     let (after, ..) = viewport_pixels(&mut h);
     let passes = shown(&h);
     assert!(!passes.contains(&Pass::ShadowMap), "the grid-shadowed frame drew a map: {passes:?}");
@@ -752,4 +755,8 @@ fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
     // grid` shows it); the lit floor itself, a quarter of the view, would move the mean by far more.
     let diff = mean_diff(&before, &after);
     assert!(diff > 0.0 && diff < 10.0, "the picture changed by {diff:.2} of 255");
+    // The baseline always draws its map: the picker is back.
+    h.state_mut().ed_mut().apply(Command::SetMethod(epivox::render::Method::Raymarch { steps: 64, jitter: true }));
+    h.run();
+    assert!(!picker(&h), "the shadow-map size is disabled for the baseline");
 }

@@ -531,6 +531,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             j["ranges"] = serde_json::json!({
                 "phi0": m.phi0, "phi_span": m.phi_span, "gamma": [m.gamma_lo, m.gamma_hi], "z": [m.z_lo, m.z_hi],
             });
+            j["surface_shadows"] = serde_json::json!(if o.setup.grid_shadowed() { "grid" } else { "map" });
         }
         if let Some(p) = &pruned_z {
             j["pruning"] = serde_json::to_value(p)?;

@@ -128,6 +128,12 @@ pub const TABLE_ROWS: u32 = 256;
 pub const TABLE_COLS: u32 = 512;
 
 impl FrameSetup {
+    /// Whether the frame's surface shadows come from the shadow volume ([`FLAG_GRID_SHADOWS`]):
+    /// it draws no shadow map.
+    pub fn grid_shadowed(&self) -> bool {
+        self.uniforms.image.w & FLAG_GRID_SHADOWS != 0
+    }
+
     /// The shader variant this frame's passes run as: its light, `phase`, medium and grid axes
     /// (cosine bins only where the method has bins).
     pub fn variant(&self, phase: &crate::params::Phase) -> super::Variant {

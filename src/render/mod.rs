@@ -767,7 +767,7 @@ impl Renderer {
     /// method's; only from a pyramid of the same matrix) leave the hidden triangles out.
     fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
         // (A frame that draws no map has no pyramid to make.)
-        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point() && !Self::grid_shadowed(setup);
+        let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point() && !setup.grid_shadowed();
         let key = match (&self.geometry, occlusion) {
             (Some(g), true) => Some(MapInputs::new(
                 g.fingerprint,
@@ -791,7 +791,7 @@ impl Renderer {
     /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
     /// with [`Renderer::fit_shadow_map`] on.
     fn fits_map(&self, setup: &FrameSetup) -> bool {
-        self.fit_shadow_map && !setup.frame.is_point() && !Self::grid_shadowed(setup)
+        self.fit_shadow_map && !setup.frame.is_point() && !setup.grid_shadowed()
     }
 
     /// Marks a VSV frame that scatters to take its surface shadows from the shadow volume
@@ -800,11 +800,6 @@ impl Renderer {
         if self.grid_shadows && setup.method == Method::Vsv && scene.needs_scattering() {
             setup.uniforms.image.w |= frame::FLAG_GRID_SHADOWS;
         }
-    }
-
-    /// Whether the frame's surface shadows come from the shadow volume: it draws no shadow map.
-    fn grid_shadowed(setup: &FrameSetup) -> bool {
-        setup.uniforms.image.w & frame::FLAG_GRID_SHADOWS != 0
     }
 
     /// Whether a frame of `scene` at `width x height` with `method` would take the shadow map, the
@@ -846,7 +841,7 @@ impl Renderer {
     ) -> Result<FrameInfo, RenderError> {
         let Prepared { setup, variant: v, key, faces, face_count } = self.prepare(scene, width, height, method)?;
         let fitted = self.fits_map(&setup);
-        let draws_map = !Self::grid_shadowed(&setup);
+        let draws_map = !setup.grid_shadowed();
         // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
         // results are still in the targets, the shadow map and the grid. Or only the map's inputs
         // are the same (the camera moved): the map is still in its texture.

@@ -125,15 +125,20 @@ impl Toolbar {
         let side =
             cx.jobs.render.device.as_ref().map(|d| d.limits.texture_side).unwrap_or(Baseline::SHADOW_MAP.max as u32);
         let mut size = view.shadow_map;
-        egui::ComboBox::new("shadow-map", "shadow map")
-            .selected_text(format!("{size}²"))
-            .show_ui(ui, |ui| {
-                for s in shadow_map_sizes(side) {
-                    ui.selectable_value(&mut size, s, format!("{s}² {}", Baseline::SHADOW_MAP.unit));
-                }
-            })
-            .response
-            .on_hover_text(Baseline::SHADOW_MAP.doc);
+        // A VSV frame with its shadows from the grid draws no map: the size is kept for later.
+        let unused = view.method == Method::Vsv && view.grid_shadows;
+        ui.add_enabled_ui(!unused, |ui| {
+            egui::ComboBox::new("shadow-map", "shadow map")
+                .selected_text(format!("{size}²"))
+                .show_ui(ui, |ui| {
+                    for s in shadow_map_sizes(side) {
+                        ui.selectable_value(&mut size, s, format!("{s}² {}", Baseline::SHADOW_MAP.unit));
+                    }
+                })
+                .response
+                .on_hover_text(Baseline::SHADOW_MAP.doc)
+                .on_disabled_hover_text("not drawn: VSV's surface shadows come from the grid");
+        });
         if size != view.shadow_map {
             out.push(Command::SetShadowMap(size));
         }
