@@ -49,7 +49,7 @@ step render_default "$epivox" render "$classroom" --size 1024x1024 --json --out 
 step render_paper "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
     --out "$out/classroom_1024_grid1024x1024x256.png"
 # The same two frames with Scan's thread per column (`--scan threads`; a GPU's default is a
-# workgroup per column), to keep the two measured side by side.
+# workgroup per plane), to keep the two measured side by side.
 step render_default_threads "$epivox" render "$classroom" --size 1024x1024 --json --scan threads \
     --out "$out/classroom_1024_threads.png"
 step render_paper_threads "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \

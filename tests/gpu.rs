@@ -299,11 +299,11 @@ fn scatter_table_matches_the_f64_mirror() {
     }
 }
 
-/// Scan with a workgroup per column (`Renderer::scan_columns`, scan_columns.wgsl) sets the same
-/// bits as a thread per column: a point light over the occluder (one vector of bins per ray), and
-/// the procedural room under a sun (six: 768 bins), whose columns fill up early (the write-only
-/// tail) at a ray count that is no multiple of the 64 runs (333 rays: runs of 6, the last
-/// threads' empty).
+/// Scan with a workgroup per plane (`Renderer::scan_columns`, scan_columns.wgsl) sets the same
+/// bits as a thread per column: a point light over the occluder (one vector of bins per ray: 256
+/// runs of 2 of its 512 rays), and the procedural room under a sun (six vectors: 768 bins; 42 runs
+/// and 4 idle threads), whose columns fill up early (the write-only tail) at a ray count that is
+/// no multiple of the runs (333 rays: runs of 8, the last one 5).
 #[test]
 fn scanning_columns_with_workgroups_sets_the_same_bits() {
     let Some(mut r) = renderer() else { return };

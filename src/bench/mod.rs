@@ -712,7 +712,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     }
 
     notes.push(if renderer.scan_columns {
-        "Scan: a workgroup per column of four words where rays start on four words (scan_columns.wgsl; \
+        "Scan: a workgroup per plane where rays start on four words (scan_columns.wgsl; \
          `--scan columns`, a hardware GPU's default), a thread per column elsewhere"
             .into()
     } else {

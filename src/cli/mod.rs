@@ -71,7 +71,8 @@ pub enum Command {
 pub enum ScanBy {
     /// A thread per column (scan.wgsl, scan_words.wgsl): the CPU adapters' default.
     Threads,
-    /// A workgroup per column of four words (scan_columns.wgsl): the hardware GPUs' default.
+    /// A workgroup per plane, its columns' rays split into runs (scan_columns.wgsl): the hardware
+    /// GPUs' default.
     Columns,
 }
 

@@ -350,10 +350,11 @@ pub struct Renderer {
     /// are solids' faces turned away from the eye) as empty ones, skipping their vertex work (on by
     /// default; the targets are the same either way, off only to compare, `tests/surface_cull.rs`).
     pub surface_culling: bool,
-    /// Scan a column of the grid (a plane's four words of bins) with a workgroup instead of one
-    /// thread (`scan_columns.wgsl`; grids whose rays start on four words): the same bits. On by
-    /// default on hardware GPUs, where one thread per column leaves most of the chip idle (on an
-    /// H200 it takes the paper's grid's Scan from 0.50 to 0.06 ms, docs/results.md); off on CPU
+    /// Scan the grid's columns (a plane's four words of bins each) with a workgroup per plane
+    /// instead of one thread per column (`scan_columns.wgsl`; grids whose rays start on four
+    /// words): the same bits. On by default on hardware GPUs, where one thread per column leaves
+    /// most of the chip idle (on an H200 the paper's grid's Scan 0.50 -> 0.05 ms, the default
+    /// grid's 0.20 -> 0.12 ms from session 25's workgroup per plane, docs/results.md); off on CPU
     /// adapters (llvmpipe), whose few threads are all busy either way and where it reads the grid
     /// twice (classroom frame 261-285 -> 353-398 ms). `--scan threads|columns` overrides it.
     pub scan_columns: bool,
@@ -943,10 +944,9 @@ impl Renderer {
                     if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                         f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
                     }
-                    // (The frame's own grid: planes in x, words per ray in w; Scan uses it on quad grids.)
-                    let g = setup.uniforms.grid;
-                    let columns = self.scan_columns.then_some(g.x * g.w / 4);
-                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, columns);
+                    // (The frame's own grid: planes in x; Scan uses it on quad grids.)
+                    let planes = self.scan_columns.then_some(setup.uniforms.grid.x);
+                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, planes);
                     f.mark(Pass::Scan);
                 }
                 if setup.frame.is_point() && method == Method::Vsv {

@@ -4,7 +4,8 @@
 //!   shadow[x, y, k] = OR_{y' <= y} geometry[x, y', k]
 //!
 //! A thread per column (a plane's four words of bins) walks its rays in turn; or, with
-//! `Renderer::scan_columns`, a workgroup per column splits them into runs (`scan_columns.wgsl`).
+//! `Renderer::scan_columns`, a workgroup per plane splits its columns' rays into runs
+//! (`scan_columns.wgsl`).
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
@@ -19,7 +20,7 @@ pub struct Scan {
     quads: wgpu::ComputePipeline,
     /// For the others (`scan_words.wgsl`, a word at a time).
     words: wgpu::ComputePipeline,
-    /// A workgroup per column of four words (`scan_columns.wgsl`).
+    /// A workgroup per plane (`scan_columns.wgsl`).
     columns: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
@@ -47,25 +48,25 @@ impl Scan {
     }
 
     /// `args` holds the indirect dispatch at byte `offset` (no workgroups when no caster was kept);
-    /// `quad_rays`: [`crate::params::Grid::quad_rays`]. `columns`: on a quad grid, scan with a
-    /// workgroup per column of four words instead, this many columns (a direct dispatch, which scans
-    /// the cleared grid too when no caster was kept); other grids ignore it.
+    /// `quad_rays`: [`crate::params::Grid::quad_rays`]. `planes`: on a quad grid, scan with a
+    /// workgroup per plane instead, this many planes (a direct dispatch, which scans the cleared
+    /// grid too when no caster was kept); other grids ignore it.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         args: &wgpu::Buffer,
         offset: u64,
         quad_rays: bool,
-        columns: Option<u32>,
+        planes: Option<u32>,
     ) {
         let Some(bind_group) = &self.bind_group else { return };
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("Scan::pass"), timestamp_writes: None });
         pass.set_bind_group(0, bind_group, &[]);
-        match columns {
+        match planes {
             Some(n) if quad_rays => {
                 pass.set_pipeline(&self.columns);
-                // scan_columns.wgsl: column = wg.y * 65535 + wg.x.
+                // scan_columns.wgsl: plane = wg.y * 65535 + wg.x.
                 pass.dispatch_workgroups(n.clamp(1, 65535), n.div_ceil(65535).max(1), 1);
             }
             _ => {
