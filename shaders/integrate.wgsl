@@ -370,15 +370,14 @@ struct SurfacePoint {
 
 var<private> sp: SurfacePoint;
 
-// 1 where bin j of plane x's light ray, read on the cell before its point at its reach, is lit.
+// 1 where bin j of plane x's light ray, read on the cell before its point at its reach, is lit;
+// m: the plane's unit direction away from the axis.
 // With the surface's normal, the reach is where the sample ray meets the surface's tangent plane
 // (clamped to P's own reach +- s, the bound above), moved MARGIN s toward the light.
-fn sample_lit(x: u32, j: u32, offset: f32) -> f32 {
+fn sample_lit(x: u32, m: vec3f, j: u32, offset: f32) -> f32 {
     let z = z_of_bin(f, f32(j) + 0.5 + offset);
     var reach = sp.reach;
     if (sp.exact) {
-        let phi = phi_of_plane(f, f32(x) + 0.5);
-        let m = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
         let a = f.axis.xyz;
         if (is_point_light()) {
             let dir = m * sin(z) - a * cos(z);
@@ -416,7 +415,9 @@ fn plane_lit(x: u32, b: f32) -> f32 {
     let top = f32(f.grid.z - 1u);
     let lo = u32(clamp(j, 0.0, top));
     let hi = u32(clamp(j + 1.0, 0.0, top));
-    return mix(sample_lit(x, lo, offset), sample_lit(x, hi, offset), u - j);
+    let phi = phi_of_plane(f, f32(x) + 0.5);
+    let m = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
+    return mix(sample_lit(x, m, lo, offset), sample_lit(x, m, hi, offset), u - j);
 }
 
 // The step from pixel p's point to its neighbour along `step` (either side: the one nearer in
