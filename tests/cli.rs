@@ -101,6 +101,26 @@ fn renders_the_builtin_scene_with_json_and_exr() {
 /// `--depth-exr` writes where the view rays end; `--view-ends` gives them to the reference, which
 /// reports how many differ from its own first hits; wrong sizes, wrong methods and values that
 /// are not distances are named.
+/// A headless run (no `XDG_RUNTIME_DIR`, as under CI or ssh) prints no error when nothing failed:
+/// Mesa's device-select layer made libwayland print "error: XDG_RUNTIME_DIR is invalid or not set"
+/// on every command (src/main.rs, `quiet_headless_vulkan`).
+#[test]
+fn a_headless_run_prints_no_spurious_error() {
+    if !has_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("quiet.png");
+    let mut c = Command::new(env!("CARGO_BIN_EXE_epivox"));
+    c.args(["render", "--out", png.to_str().unwrap(), "--size", "16x16", "--grid", "64x64x32"]);
+    c.env_remove("XDG_RUNTIME_DIR").env_remove("NODEVICE_SELECT").env_remove("WAYLAND_DISPLAY");
+    let o = c.output().expect("run epivox");
+    let err = stderr(&o);
+    assert!(o.status.success(), "render failed: {err}");
+    assert!(png.is_file());
+    assert!(!err.to_lowercase().contains("error"), "a successful headless render printed an error: {err}");
+}
+
 #[test]
 fn view_ends_round_trip_and_bad_ones_are_named() {
     if !has_adapter() {
