@@ -4,7 +4,8 @@
 # 1. Installs, only when missing, what the tests need: the Mesa software Vulkan driver
 #    (lavapipe, so the GPU tests run without a GPU) and Xvfb (a virtual X display).
 # 2. Starts Xvfb (when DISPLAY is unset) for the editor window test.
-# 3. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset.
+# 3. Runs `cargo test --locked --all-targets` with WAYLAND_DISPLAY unset (and NODEVICE_SELECT=1
+#    where XDG_RUNTIME_DIR is unset: no spurious Wayland errors in the log).
 #
 # Works from any directory; exits non-zero on the first failure.
 set -euo pipefail
@@ -65,6 +66,12 @@ fi
 # tests/editor_window.rs opens the real editor window; give it a virtual X display when there is
 # none (the test skips, saying so, when DISPLAY stays unset).
 unset WAYLAND_DISPLAY
+# Without XDG_RUNTIME_DIR, Mesa's device-select layer makes libwayland print "error:
+# XDG_RUNTIME_DIR is invalid" for every Vulkan instance a test makes; the epivox binary turns
+# the layer off itself there (src/main.rs), the test processes need it said here.
+if [[ -z "${XDG_RUNTIME_DIR:-}" ]]; then
+    export NODEVICE_SELECT="${NODEVICE_SELECT:-1}"
+fi
 if [[ -z "${DISPLAY:-}" ]] && command -v Xvfb >/dev/null 2>&1; then
     display=":99"
     # Another server may hold :99 already (a previous run): pick the first free number.
