@@ -10,7 +10,9 @@
 # 512x512 classroom bench also measures grids larger than llvmpipe's 128 MiB binding allows
 # (`--grid`): on the software driver every 100 MB grid shape stops near 1% (docs/results.md,
 # "Where the classroom's remaining error lies"), and a GPU can show whether more bits get VSV
-# below the 1024-step march's 0.76% (the chase then finds a finer march to compare with). The
+# below the 1024-step march's 0.76% (the chase then finds a finer march to compare with); with
+# 2048x384x1280 (on llvmpipe as fast as the default and 10% more accurate, session 26) and
+# 2048x512x2048 (more bins, which bought the most so far: 2048x512x1536 measured 0.780%). The
 # renders, the 512x512 classroom bench, the bunny and the scaling sweep run once more with VSV's
 # surface shadows from the shadow volume (`--surface-shadows grid`: no shadow map in its frames).
 #
@@ -94,10 +96,11 @@ step render_default_grid_shadows "$epivox" render "$classroom" --size 1024x1024 
 step render_paper_grid_shadows "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
     --surface-shadows grid --out "$out/classroom_1024_grid1024x1024x256_grid_shadows.png"
 step classroom512_grid_shadows "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
-    --surface-shadows grid --grid 2048x512x1536 --cache-dir "$cache" --out "$out/classroom512_grid_shadows"
+    --surface-shadows grid --grid 2048x512x1536 --grid 2048x384x1280 --grid 2048x512x2048 \
+    --cache-dir "$cache" --out "$out/classroom512_grid_shadows"
 step classroom512 "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
     --grid 4096x512x768 --grid 2048x1024x768 --grid 2048x512x1536 --grid 4096x1024x1024 \
-    --cache-dir "$cache" --out "$out/classroom512"
+    --grid 2048x384x1280 --grid 2048x512x2048 --cache-dir "$cache" --out "$out/classroom512"
 step classroom512_threads "$epivox" bench "$classroom" --size 512x512 --frames 5 --no-scaling --scan threads \
     --cache-dir "$cache" --out "$out/classroom512_threads"
 [[ -f $bunny ]] && step bunny "$epivox" bench "$bunny" --size 1024x1024 --frames 3 --no-scaling \
