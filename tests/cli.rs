@@ -98,9 +98,6 @@ fn renders_the_builtin_scene_with_json_and_exr() {
     assert!(share("10%") >= 0.1, "the worst tenth holds at least a tenth: {j}");
 }
 
-/// `--depth-exr` writes where the view rays end; `--view-ends` gives them to the reference, which
-/// reports how many differ from its own first hits; wrong sizes, wrong methods and values that
-/// are not distances are named.
 /// A headless run (no `XDG_RUNTIME_DIR`, as under CI or ssh) prints no error when nothing failed:
 /// Mesa's device-select layer made libwayland print "error: XDG_RUNTIME_DIR is invalid or not set"
 /// on every command (src/main.rs, `quiet_headless_vulkan`).
@@ -121,6 +118,9 @@ fn a_headless_run_prints_no_spurious_error() {
     assert!(!err.to_lowercase().contains("error"), "a successful headless render printed an error: {err}");
 }
 
+/// `--depth-exr` writes where the view rays end; `--view-ends` gives them to the reference, which
+/// reports how many differ from its own first hits; wrong sizes, wrong methods and values that
+/// are not distances are named.
 #[test]
 fn view_ends_round_trip_and_bad_ones_are_named() {
     if !has_adapter() {
