@@ -45,14 +45,8 @@ pub struct BenchArgs {
     /// Skip the time-against-triangles and time-against-resolution sweeps.
     #[arg(long)]
     pub no_scaling: bool,
-    /// How Scan ORs the grid's columns (the same images either way) [default: columns on a
-    /// hardware GPU, threads on a CPU adapter: `Renderer::scan_columns`].
-    #[arg(long, value_enum)]
-    pub scan: Option<super::ScanBy>,
-    /// Where VSV's surface shadows come from [default: map]; the raymarch baseline's always come
-    /// from the shadow map.
-    #[arg(long, value_enum)]
-    pub surface_shadows: Option<super::SurfaceShadows>,
+    #[command(flatten)]
+    pub passes: super::PassChoices,
     #[arg(long, value_parser = super::parse_samples, help = super::samples_help())]
     pub samples: Option<usize>,
     #[arg(long = "grid", value_name = "GRID", value_parser = super::parse_grid, help = format!(
@@ -99,8 +93,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
 
     let ctx = GpuContext::headless()?;
     let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
-    super::ScanBy::apply(args.scan, &mut renderer);
-    super::SurfaceShadows::apply(args.surface_shadows, &mut renderer);
+    args.passes.apply(&mut renderer);
     eprintln!(
         "benchmarking {} ({} triangles) at {}x{} on {}",
         scene.name,

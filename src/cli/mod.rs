@@ -76,15 +76,6 @@ pub enum ScanBy {
     Columns,
 }
 
-impl ScanBy {
-    /// Sets the renderer's choice when one was given, else keeps its adapter's default.
-    pub fn apply(choice: Option<ScanBy>, renderer: &mut Renderer) {
-        if let Some(by) = choice {
-            renderer.scan_columns = by == ScanBy::Columns;
-        }
-    }
-}
-
 /// Where a VSV frame's surface shadows come from (`Renderer::grid_shadows`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
 pub enum SurfaceShadows {
@@ -95,10 +86,27 @@ pub enum SurfaceShadows {
     Map,
 }
 
-impl SurfaceShadows {
-    /// Sets the renderer's choice when one was given, else keeps its default.
-    pub fn apply(choice: Option<SurfaceShadows>, renderer: &mut Renderer) {
-        if let Some(from) = choice {
+/// How the GPU frame's passes run, for `render` and `bench` alike (the renderer's own defaults
+/// where a flag is left out).
+#[derive(clap::Args)]
+pub struct PassChoices {
+    /// How Scan ORs the grid's columns (the same image either way) [default: columns on a hardware
+    /// GPU, threads on a CPU adapter: `Renderer::scan_columns`].
+    #[arg(long, value_enum)]
+    pub scan: Option<ScanBy>,
+    /// Where VSV's surface shadows come from [default: map]. The raymarch baseline's always come
+    /// from the shadow map.
+    #[arg(long, value_enum)]
+    pub surface_shadows: Option<SurfaceShadows>,
+}
+
+impl PassChoices {
+    /// Sets the renderer's choices that were given; keeps its defaults for the others.
+    pub fn apply(&self, renderer: &mut Renderer) {
+        if let Some(by) = self.scan {
+            renderer.scan_columns = by == ScanBy::Columns;
+        }
+        if let Some(from) = self.surface_shadows {
             renderer.grid_shadows = from == SurfaceShadows::Grid;
         }
     }
@@ -179,14 +187,8 @@ pub struct RenderArgs {
     /// texels).
     #[arg(long)]
     pub no_shadow_fit: bool,
-    /// How Scan ORs the grid's columns (the same image either way) [default: columns on a hardware
-    /// GPU, threads on a CPU adapter: `Renderer::scan_columns`].
-    #[arg(long, value_enum)]
-    pub scan: Option<ScanBy>,
-    /// Where VSV's surface shadows come from [default: map]. The raymarch baseline's always come
-    /// from the shadow map.
-    #[arg(long, value_enum)]
-    pub surface_shadows: Option<SurfaceShadows>,
+    #[command(flatten)]
+    pub passes: PassChoices,
     #[arg(long, value_parser = parse_samples, help = samples_help())]
     pub samples: Option<usize>,
     #[arg(long, value_parser = parse_steps,
@@ -495,8 +497,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             }
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
-            ScanBy::apply(args.scan, &mut renderer);
-            SurfaceShadows::apply(args.surface_shadows, &mut renderer);
+            args.passes.apply(&mut renderer);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;
