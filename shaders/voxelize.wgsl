@@ -200,6 +200,10 @@ fn main(
     var slot = found.x;
     var rec = records[slot];
     var per_plane = word_groups(f, rec.w >> 16u);
+    // The triangle's vertices, loaded again only when the run moves on to the next triangle: a
+    // thread's items are mostly one triangle's planes, and three vector loads per item were 2-4 ms
+    // of the classroom's Voxelize on llvmpipe (session 27; the same bits).
+    var tri = triangle(rec.x);
     // The item's index within its triangle's items, followed along the run.
     var within = found.y;
     let last = min(base + LANES * run, total);
@@ -208,6 +212,7 @@ fn main(
             within += LANES;
             // Past the triangle's items: on to the triangle that holds this one (a real loop,
             // so that lanes still inside their triangle skip it).
+            let before = slot;
             loop {
                 let n = rec.z * per_plane;
                 if (within < n) { break; }
@@ -216,12 +221,13 @@ fn main(
                 rec = records[slot];
                 per_plane = word_groups(f, rec.w >> 16u);
             }
+            if (slot != before) { tri = triangle(rec.x); }
         }
         // within / per_plane in f32 (llvmpipe divides integers one lane at a time). Exact: within
         // < 2^19 and per_plane <= 64 (Grid limits), so (within + 1/2) / per_plane lies at least
         // 1/(2 per_plane) from an integer, more than its rounding error.
         let plane = u32(floor((f32(within) + 0.5) / f32(per_plane)));
-        voxelize_item(rec, plane, within - plane * per_plane, triangle(rec.x));
+        voxelize_item(rec, plane, within - plane * per_plane, tri);
     }
 }
 
