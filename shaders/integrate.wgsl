@@ -338,10 +338,12 @@ fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32)
 //
 // The surface point P at the end of the view ray sees the light where no caster lies on its light
 // ray before it, which is what the shadow volume holds. V = the lit fraction of the bins around
-// P's z, blended like the medium's (two planes, two bins: a 2x2 filter, like a shadow map's). Each
-// of the four sample light rays (its plane's centre, its bin's centre z_k) is read on the ray cell
-// before the one holding the point where it meets the surface: the cell's bits hold every caster
-// up to its end (inclusive scan), and the surface's own voxels lie in the cell after.
+// P's z: on each of four planes around the pixel's angle the two bin samples around P's z, blended
+// linearly, and the planes weighted by a tent two planes wide either side (SURFACE_PLANES): a 4x2
+// filter, like a shadow map's percentage-closer one. Each of the eight sample light rays (its
+// plane's centre, its bin's centre z_k) is read on the ray cell before the one holding the point
+// where it meets the surface: the cell's bits hold every caster up to its end (inclusive scan), and
+// the surface's own voxels lie in the cell after.
 //
 // Where it meets the surface: the sample ray against P's tangent plane, whose normal comes from the
 // neighbouring pixels' points (trusted where it reproduces Surface's own cos theta_i), moved a
@@ -351,8 +353,10 @@ fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32)
 // slope-scaled bias of a shadow map). A point is placed by its reach: along the axis for a sun (u,
 // so gamma_k = atan2(z_k, u)) and from the light for a point light (d, gamma_k = atan2(d sin psi_k,
 // D - d cos psi_k)). The cost is that of any bias: a caster within the margin plus a cell of P
-// casts no shadow on it. (One bias s for all four samples, with no normal, self-shadowed the
-// occluder's floor: 88% of its lit pixels right against 100%, tests/gpu.rs.)
+// casts no shadow on it. (One bias s for all the samples, with no normal, self-shadowed the
+// occluder's floor: 88% of its lit pixels right against 100%, tests/gpu.rs. The outer planes lie
+// up to two planes away, but a bias for two planes took the classroom's whole image from 62.99 to
+// 64.17% off: their weights are small.)
 //
 // A frame then needs no shadow map at all: on an H200 the sun's 2048^2 map was 1.4 of the
 // classroom's 2.3 ms at 512x512 (docs/results.md, session 25).
@@ -467,10 +471,30 @@ fn surface_visibility(p: vec2i, v: vec3f, t_s: f32, gamma: f32, cos_i: f32, x: v
     if (dot(n, v) > 0.0) { n = -n; }
     let exact = dx.w > 0.0 && dy.w > 0.0 && cos_i > 0.0625 && abs(dot(n, w) - cos_i) < 0.05;
     sp = SurfacePoint(pos, n, exact, reach, s);
-    var vis = 0.0;
-    if (weights.x > 0.0) { vis += weights.x * plane_lit(x.x, b); }
-    if (weights.y > 0.0) { vis += weights.y * plane_lit(x.y, b); }
-    return vis;
+    // Four planes, x0 - 1 to x1 + 1, weighted by a tent SURFACE_PLANES planes wide either side of
+    // the pixel's angle (its weights sum to 2 for every fx).
+    let t = max(vec4f(0.0), 1.0 - abs(vec4f(-1.0, 0.0, 1.0, 2.0) - weights.y) / SURFACE_PLANES);
+    var vis = t.y * plane_lit(x.x, b) + t.z * plane_lit(x.y, b);
+    if (t.x > 0.0) { vis += t.x * plane_lit(plane_beside(x.x, -1), b); }
+    if (t.w > 0.0) { vis += t.w * plane_lit(plane_beside(x.y, 1), b); }
+    return 0.5 * vis;
+}
+
+// The tent's half-width in planes. A shadow edge across the bins sits somewhere between two bin
+// samples, and the planes on either side sample it at staggered bins (bin_offset): a tent over
+// four planes averages two samples of each phase where two planes gave one, which turns the
+// dotted edges of the classroom's sunlit floor into lines (docs/results.md, session 27: the whole
+// image 66.65 -> 62.99% off the reference at the default grid, 54.41 -> 51.97% at 2048x384x1280;
+// 1.5 planes 63.36%, 3 planes 63.56%, 4 planes 64.64%). The planes are finer than the pixels (three
+// to four per pixel on the classroom), so the wider tent does not blur the image across them.
+const SURFACE_PLANES: f32 = 2.0;
+
+// The plane `step` planes from x: around the circle where the planes cover it, else clamped.
+fn plane_beside(x: u32, step: i32) -> u32 {
+    let planes = i32(f.grid.x);
+    var y = i32(x) + step;
+    if ((f.image.w & FLAG_PHI_WRAPS) != 0u) { y = (y + planes) % planes; }
+    return u32(clamp(y, 0, planes - 1));
 }
 
 // ---- per pixel -----------------------------------------------------------------------------
