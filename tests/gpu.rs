@@ -167,6 +167,72 @@ fn broken_shader_reload_keeps_the_last_good_pipelines() {
     assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
 }
 
+/// A panic inside a GPU scope (as naga's SPIR-V back end can throw on a shader its validator
+/// accepted) comes back as an error naming what was being done, and the device's error scopes
+/// stay balanced: the next scope still catches its own validation error, and the one after that
+/// is clean.
+#[test]
+fn a_panic_inside_a_gpu_scope_is_an_error_and_the_scopes_stay_balanced() {
+    let Some(r) = renderer() else { return };
+    let ctx = &r.ctx;
+    let err = ctx.scoped("testing a panic", || panic!("the compiler fell over")).unwrap_err();
+    assert!(
+        matches!(&err, epivox::gpu::GpuError::Panicked { during, message }
+            if during == "testing a panic" && message == "the compiler fell over"),
+        "{err}"
+    );
+    // MAP_READ with MAP_WRITE is a validation error: this scope must catch it, not an outer one.
+    let invalid = ctx.scoped("making an invalid buffer", || {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("test::invalid"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE,
+            mapped_at_creation: false,
+        })
+    });
+    assert!(matches!(invalid, Err(epivox::gpu::GpuError::Validation { .. })), "{:?}", invalid.err());
+    assert_eq!(ctx.scoped("nothing", || 7).unwrap(), 7);
+}
+
+/// A shader that naga 30's validator accepts but its SPIR-V back end panics on (a `let` of a
+/// constant vector whose components feed `select`, met in session 27) fails its reload like any
+/// broken edit, and the last good pipelines keep rendering the same picture. (A back end that
+/// compiles it, a fixed naga or another API, reloads it: then only the picture is checked.)
+#[test]
+fn a_shader_the_compiler_panics_on_fails_its_reload_and_keeps_the_pipelines() {
+    let Some(mut r) = renderer() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    for (name, src) in epivox::gpu::shaders_embedded() {
+        std::fs::write(dir.path().join(name), src).unwrap();
+    }
+    let lib = epivox::gpu::ShaderLibrary::new(Some(dir.path().to_path_buf()));
+    r.reload(&lib).unwrap();
+    let scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
+    let before = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
+
+    let path = dir.path().join("common.wgsl");
+    let good = std::fs::read_to_string(&path).unwrap();
+    let old = "    return select(-0.25, 0.25, (x & 1u) == 1u);";
+    assert!(good.contains(old), "bin_offset changed: update this test's edit");
+    let crashing = "    let t = vec4f(-0.25, 0.25, -0.25, 0.25);\n    let i = x & 3u;\n    \
+                    return select(select(t.x, t.y, i == 1u), select(t.z, t.w, i == 3u), i >= 2u);";
+    std::fs::write(&path, good.replace(old, crashing)).unwrap();
+    match r.reload(&lib) {
+        Err(e) => {
+            assert!(matches!(e, epivox::gpu::GpuError::Panicked { .. }), "{e}");
+            assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr, "the picture changed");
+        }
+        // The same offsets, written another way: the same picture.
+        Ok(()) => {
+            eprintln!("this back end compiles the shader naga 30's SPIR-V writer panicked on");
+            assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr, "the picture changed");
+        }
+    }
+    std::fs::write(&path, good).unwrap();
+    r.reload(&lib).unwrap();
+    assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
+}
+
 /// A VSV frame of `scene`, where its view rays end, and the reference integrated along those same
 /// view segments (so that primary visibility cannot differ between the two).
 fn along_the_same_segments(

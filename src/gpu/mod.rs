@@ -32,6 +32,20 @@ pub enum GpuError {
     Validation { during: String, message: String },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    #[error(
+        "wgpu panicked while {during}: {message} (most likely a bug of the shader compiler, on a \
+         shader its validator had accepted)"
+    )]
+    Panicked { during: String, message: String },
+}
+
+/// The text of a caught panic.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "a panic without a message".into())
 }
 
 /// An adapter, device and queue, plus what we learned about them.
@@ -239,11 +253,20 @@ impl GpuContext {
         Ok(out)
     }
 
-    /// Runs `f` inside a validation error scope and reports what it caught.
+    /// Runs `f` inside a validation error scope and reports what it caught. A panic in `f` is
+    /// caught too, after the scope is closed, and reported as [`GpuError::Panicked`]: naga's SPIR-V
+    /// back end can panic on a shader its validator accepted (naga 30, session 27: a `let` of a
+    /// constant vector whose components feed `select`), and a shader edit must fail like any
+    /// other broken edit, with the last good pipelines still running, not end the renderer.
     pub fn scoped<T>(&self, during: &str, f: impl FnOnce() -> T) -> Result<T, GpuError> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let value = f();
-        match pollster::block_on(scope.pop()) {
+        let value = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+        let caught = pollster::block_on(scope.pop());
+        let value = value.map_err(|payload| GpuError::Panicked {
+            during: during.to_string(),
+            message: panic_message(payload.as_ref()),
+        })?;
+        match caught {
             None => Ok(value),
             Some(e) => Err(GpuError::Validation { during: during.to_string(), message: e.to_string() }),
         }
