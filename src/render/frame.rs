@@ -134,14 +134,15 @@ impl FrameSetup {
         self.uniforms.image.w & FLAG_GRID_SHADOWS != 0
     }
 
-    /// The shader variant this frame's passes run as: its light, `phase`, medium and grid axes
-    /// (cosine bins only where the method has bins).
+    /// The shader variant this frame's passes run as: its light, `phase`, medium, grid axes
+    /// (cosine bins only where the method has bins) and surface shadows.
     pub fn variant(&self, phase: &crate::params::Phase) -> super::Variant {
         let cosine =
             self.mapping.spacing == BinSpacing::UniformCosine && !matches!(self.method, Method::Raymarch { .. });
         super::Variant::new(self.frame.is_point(), phase, self.uniforms.sigma_t.truncate().to_array())
             .with_grid(self.method == Method::Cartesian, cosine)
             .with_quad_rays(self.mapping.grid.quad_rays())
+            .with_grid_shadows(self.grid_shadowed())
     }
 
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {

@@ -8,9 +8,10 @@
 //! bin j's lit fraction blended between the two planes around the pixel, on its own ray cell. Only
 //! the bins where `q` changes are visited.
 //!
-//! In a VSV frame it also reads the surfaces' shadows from the same bits (`FLAG_GRID_SHADOWS`,
-//! [`super::Renderer::grid_shadows`]): the lit fraction of the bins around the surface point,
-//! a slope-scaled bias toward the light before it, into the output's alpha for Composite.
+//! In a VSV frame it also reads the surfaces' shadows from the same bits (the pipeline constant
+//! `GRID_SHADOWS`, [`super::Renderer::grid_shadows`]): the lit fraction of the bins around the
+//! surface point, a slope-scaled bias toward the light before it, into the output's alpha for
+//! Composite.
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};

@@ -1,14 +1,15 @@
 //! Shader variants (DESIGN section 6, "passes"): a pass whose shader depends on the light type, the
 //! phase function, whether the medium is grey, the grid's axes or (Integrate) whether its rays start
 //! on four words builds one pipeline per combination a frame actually uses, with the WGSL
-//! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`
-//! and `QUAD_RAYS` (`shaders/common.wgsl`) set. The shader
+//! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`,
+//! `QUAD_RAYS` and `GRID_SHADOWS` (`shaders/common.wgsl`) set. The shader
 //! compiler then folds the branches on them away when it builds the pipeline, instead of every
 //! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
 //! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
 //! constant a third of Integrate on the classroom; the Cartesian grid's and the cosine bins'
 //! branches, never taken in an epipolar frame of a sun, cost Voxelize half and Integrate a quarter
-//! of their time.)
+//! of their time; Integrate's surface shadows from the grid, behind a run-time flag that a frame
+//! with the map never set, still cost that frame's Integrate 12%, session 27.)
 //!
 //! Pipelines are built on first use ([`VariantPipelines::prepare`], called by
 //! `Renderer::render_frame` before it records) and kept, so switching the phase function in the
@@ -35,6 +36,9 @@ pub struct Variant {
     /// Every grid ray starts on four 32-bit words ([`crate::params::Grid::quad_rays`]): Integrate
     /// reads the grid as `vec4<u32>`. Only Integrate's pipelines depend on it.
     pub quad_rays: bool,
+    /// The frame's surface shadows come from the shadow volume ([`super::Renderer::grid_shadows`]):
+    /// Integrate computes them. Only Integrate's pipelines depend on it.
+    pub grid_shadows: bool,
 }
 
 impl Variant {
@@ -42,7 +46,15 @@ impl Variant {
     /// bins uniform in angle or distance; see [`Variant::with_grid`].
     pub fn new(point_light: bool, phase: &Phase, sigma_t: [f32; 3]) -> Variant {
         let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
-        Variant { point_light, phase: phase.id(), grey, cartesian: false, cosine_bins: false, quad_rays: true }
+        Variant {
+            point_light,
+            phase: phase.id(),
+            grey,
+            cartesian: false,
+            cosine_bins: false,
+            quad_rays: true,
+            grid_shadows: false,
+        }
     }
 
     /// The same variant for a grid of the given axes.
@@ -55,9 +67,14 @@ impl Variant {
         Variant { quad_rays, ..self }
     }
 
+    /// The same variant for a frame whose surface shadows do (or do not) come from the grid.
+    pub fn with_grid_shadows(self, grid_shadows: bool) -> Variant {
+        Variant { grid_shadows, ..self }
+    }
+
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 6] {
+    pub fn constants(&self) -> [(&'static str, f64); 7] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("POINT_LIGHT", b(self.point_light)),
@@ -66,6 +83,7 @@ impl Variant {
             ("CARTESIAN", b(self.cartesian)),
             ("COSINE_BINS", b(self.cosine_bins)),
             ("QUAD_RAYS", b(self.quad_rays)),
+            ("GRID_SHADOWS", b(self.grid_shadows)),
         ]
     }
 
@@ -123,8 +141,9 @@ impl<P> VariantPipelines<P> {
 
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
-        // Only Integrate (`All`) reads QUAD_RAYS: the others share one pipeline across grids.
-        let v_any_rays = Variant { quad_rays: true, ..v };
+        // Only Integrate (`All`) reads QUAD_RAYS and GRID_SHADOWS: the others share one pipeline
+        // across grids and surface shadows.
+        let v_any_rays = Variant { quad_rays: true, grid_shadows: false, ..v };
         let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
             Specialised::Light => Variant { phase: 0, grey: false, ..epipolar },
@@ -145,11 +164,13 @@ impl<P> VariantPipelines<P> {
                 Specialised::Light => format!("[{light}]"),
                 Specialised::LightAndGrid => format!("[{light}{}]", key.grid_name()),
                 Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
-                // Only Integrate tells the grid's ray alignment apart (an implementation detail,
-                // so not in the variant's name).
-                Specialised::All => {
-                    format!("[{key}{}]", if key.quad_rays { "" } else { ", rays off four words" })
-                }
+                // Only Integrate tells the grid's ray alignment and the surface shadows apart
+                // (implementation details, so not in the variant's name).
+                Specialised::All => format!(
+                    "[{key}{}{}]",
+                    if key.quad_rays { "" } else { ", rays off four words" },
+                    if key.grid_shadows { ", grid shadows" } else { "" }
+                ),
             };
             let p = build(&key.constants(), &label);
             self.built.push((key, p));
@@ -254,10 +275,11 @@ mod tests {
                 for (phase, (cartesian, cosine_bins)) in
                     phases.iter().flat_map(|p| [(false, false), (false, true), (true, false)].map(|g| (p, g)))
                 {
-                    for quad_rays in [true, false] {
+                    for (quad_rays, grid_shadows) in [(true, false), (false, false), (true, true)] {
                         let v = Variant::new(point_light, phase, sigma_t)
                             .with_grid(cartesian, cosine_bins)
-                            .with_quad_rays(quad_rays);
+                            .with_quad_rays(quad_rays)
+                            .with_grid_shadows(grid_shadows);
                         let constants: naga::back::PipelineConstants =
                             v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
                         for ep in &module.entry_points {
@@ -295,7 +317,7 @@ mod tests {
         assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
         assert!(common.contains("override GREY_MEDIUM"));
         assert!(common.contains("override CARTESIAN") && common.contains("override COSINE_BINS"));
-        assert!(common.contains("override QUAD_RAYS"));
+        assert!(common.contains("override QUAD_RAYS") && common.contains("override GRID_SHADOWS"));
     }
 
     #[test]
@@ -341,7 +363,10 @@ mod tests {
         let mut integrate = VariantPipelines::new(Specialised::All);
         for v in grids {
             shared.prepare(v, |c, _| {
-                assert_eq!(&c[3..], &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0), ("QUAD_RAYS", 1.0)])
+                assert_eq!(
+                    &c[3..],
+                    &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0), ("QUAD_RAYS", 1.0), ("GRID_SHADOWS", 0.0)]
+                )
             });
             voxels.prepare(v, |c, _| {
                 assert_eq!(c[3], ("CARTESIAN", if v.cartesian { 1.0 } else { 0.0 }));
@@ -384,6 +409,31 @@ mod tests {
             ]
         );
         assert_eq!(sun.with_quad_rays(false).to_string(), sun.to_string(), "not in the name users see");
+    }
+
+    /// Whether the surfaces' shadows come from the grid changes Integrate's pipeline only.
+    #[test]
+    fn only_integrate_specialises_to_grid_shadows() {
+        let sun = Variant::new(false, &Phase::Isotropic, GREY);
+        let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
+        let mut integrate = VariantPipelines::new(Specialised::All);
+        let mut labels = Vec::new();
+        for v in [sun, sun.with_grid_shadows(true)] {
+            voxels.prepare(v, |c, _| assert_eq!(c[6], ("GRID_SHADOWS", 0.0)));
+            integrate.prepare(v, |c, label| {
+                assert_eq!(c[6], ("GRID_SHADOWS", if v.grid_shadows { 1.0 } else { 0.0 }));
+                labels.push(label.to_string());
+            });
+        }
+        assert_eq!(voxels.variants().count(), 1);
+        assert_eq!(integrate.variants().count(), 2);
+        assert_eq!(
+            labels,
+            [
+                "[directional light, isotropic, grey medium]",
+                "[directional light, isotropic, grey medium, grid shadows]"
+            ]
+        );
     }
 
     const GREY: [f32; 3] = [0.09, 0.09, 0.09];
