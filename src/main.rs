@@ -27,6 +27,7 @@ fn main() {
         Some(Command::Compare { a, b, json, diff, gain }) => cli::compare(&a, &b, json, diff.as_deref(), gain),
         Some(Command::Check(args)) => cli::check(args),
         Some(Command::Bench(args)) => cli::bench(args),
+        Some(Command::Ab(args)) => cli::ab(args),
         Some(Command::Edit(args)) => cli::edit(args),
         None => cli::edit(cli::EditArgs::default()),
     };

@@ -293,3 +293,65 @@ fn surface_shadows_from_the_grid_draw_no_map_and_json_says_so() {
         assert!(passes(&march).iter().any(|p| p == "shadow_map"), "{march}");
     }
 }
+
+/// `epivox ab`: two copies of the same shaders time as two sides and give the same bits; an edit
+/// that changes Integrate's output is reported as a difference of the scattered light with its
+/// error; a folder that does not exist is named.
+#[test]
+fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
+    if !has_adapter() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (same, edited) = (dir.path().join("same"), dir.path().join("edited"));
+    for d in [&same, &edited] {
+        std::fs::create_dir(d).unwrap();
+        for (name, src) in epivox::gpu::shaders_embedded() {
+            std::fs::write(d.join(name), src).unwrap();
+        }
+    }
+    // Half the scattered light: a change of the image, not of the work.
+    let integrate = edited.join("integrate.wgsl");
+    let src = std::fs::read_to_string(&integrate).unwrap();
+    let store = "textureStore(scatter_out, vec2i(id.xy), vec4f(l, vis));";
+    assert!(src.contains(store), "integrate.wgsl's store changed: update this test's edit");
+    std::fs::write(&integrate, src.replace(store, "textureStore(scatter_out, vec2i(id.xy), vec4f(0.5 * l, vis));"))
+        .unwrap();
+    let run = |a: &Path, b: &Path| -> serde_json::Value {
+        let args = [
+            "ab",
+            "--a",
+            a.to_str().unwrap(),
+            "--b",
+            b.to_str().unwrap(),
+            "--size",
+            "48x32",
+            "--grid",
+            "128x128x64",
+            "--rounds",
+            "2",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--json",
+        ];
+        let o = epivox(&args, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).expect("stdout is one JSON object")
+    };
+    let j = run(&same, &same);
+    assert_eq!(j["scatter"]["same"], true, "{j}");
+    assert_eq!(j["final"]["same"], true, "{j}");
+    assert_eq!(j["a"]["round_ms"].as_array().map(Vec::len), Some(2), "{j}");
+    assert!(j["a"]["total_ms"].as_f64().is_some_and(|t| t >= 0.0), "{j}");
+    let j = run(&same, &edited);
+    assert_eq!(j["scatter"]["same"], false, "{j}");
+    // B = A / 2 exactly (a power of two): the RMSE is half A's root mean square, which is at
+    // least A's mean, so the relative RMSE is at least 50% (equal only for a flat image).
+    let err = j["scatter"]["error"]["rel_rmse"].as_f64().expect("an error against A");
+    assert!(err > 0.4999 && err < 5.0, "{j}");
+    let missing = dir.path().join("no-such-folder");
+    let err = fails(&["ab", "--b", missing.to_str().unwrap(), "--size", "16x16"], &[]);
+    assert!(err.contains("no-such-folder") && err.contains("not a folder"), "{err}");
+}

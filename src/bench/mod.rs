@@ -14,6 +14,7 @@
 //! A benchmark measures; it asserts nothing. Every number in the report comes from this run (or,
 //! for the reference image, from the cache entry whose key says it was rendered from the same data).
 
+pub mod ab;
 mod cache;
 mod plot;
 mod procedural;

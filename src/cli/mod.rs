@@ -1,10 +1,12 @@
 //! The command line: argument types and the headless commands (render, compare).
 
+mod ab;
 mod bench;
 mod check;
 mod edit;
 mod outputs;
 
+pub use ab::ab;
 pub use bench::bench;
 pub use check::check;
 pub use edit::{edit, EditArgs};
@@ -64,6 +66,9 @@ pub enum Command {
     /// Measure error against GPU time for every method and the ray-marching baseline; writes
     /// results.csv, report.md and plots into --out.
     Bench(bench::BenchArgs),
+    /// Time an edited shader folder (--b) against the current one (--a) on one scene: per-pass GPU
+    /// medians of whole frames over interleaved rounds, and whether the images differ.
+    Ab(ab::AbArgs),
 }
 
 /// How Scan ORs each column of the grid (`Renderer::scan_columns`).

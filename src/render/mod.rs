@@ -487,13 +487,18 @@ impl Renderer {
         Ok(())
     }
 
-    /// Texels per side of each shadow-map layer.
+    /// The folder the shaders were loaded from (`None`: the ones built into the binary).
+    pub fn shader_dir(&self) -> Option<&std::path::Path> {
+        self.lib.dir()
+    }
+
     /// Whether the last frame's geometry could have its cube faces culled (see
     /// [`Renderer::shadow_face_culling`]).
     pub fn shadow_face_lists(&self) -> bool {
         self.passes.shadow_map.has_face_lists()
     }
 
+    /// Texels per side of each shadow-map layer.
     pub fn shadow_map_size(&self) -> u32 {
         self.passes.shadow_map.size
     }

@@ -1,0 +1,199 @@
+//! `epivox ab`: the command-line side of [`epivox::bench::ab`].
+
+use anyhow::{bail, Context, Result};
+use epivox::bench::ab::{self, AbImages, AbOptions, AbResult};
+use epivox::gpu::{GpuContext, ShaderLibrary};
+use epivox::params::{Grid, Measure};
+use epivox::render::{Method as GpuMethod, Renderer};
+use epivox::scene::{builtin_scene, load_scene};
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct AbArgs {
+    /// A mesh, a folder of meshes, a Mitsuba scene or a .toml scene file (the built-in scene when
+    /// omitted).
+    pub scene: Option<PathBuf>,
+    /// The shader folder under test (a copy of shaders/ with an edit).
+    #[arg(long, value_name = "DIR")]
+    pub b: PathBuf,
+    /// The shader folder to compare it with [default: $EPIVOX_SHADER_DIR, ./shaders, or the
+    /// shaders built into the binary].
+    #[arg(long, value_name = "DIR")]
+    pub a: Option<PathBuf>,
+    #[arg(long, default_value = "512x512", value_parser = super::parse_size, help = super::size_help())]
+    pub size: (u32, u32),
+    /// The GPU method whose frames are timed.
+    #[arg(long, value_enum, default_value_t = AbMethod::Vsv)]
+    pub method: AbMethod,
+    #[arg(long, value_parser = super::parse_grid, help = super::grid_help())]
+    pub grid: Option<Grid>,
+    #[arg(long, default_value_t = 5, value_parser = |s: &str| super::parse_count::<u32>(&Measure::FRAMES, s),
+          help = super::spec_help("Frames timed per side and round", &Measure::FRAMES))]
+    pub frames: u32,
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| super::parse_count::<u32>(&Measure::WARMUP, s),
+          help = super::spec_help("Frames each side renders before the first round", &Measure::WARMUP))]
+    pub warmup: u32,
+    #[arg(long, default_value_t = 4, value_parser = |s: &str| super::parse_count::<u32>(&Measure::ROUNDS, s),
+          help = super::spec_help(
+              "Rounds, each timing both sides, in alternating order (a drift of the machine's speed \
+               then falls on both)",
+              &Measure::ROUNDS,
+          ))]
+    pub rounds: u32,
+    #[command(flatten)]
+    pub passes: super::PassChoices,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum, Debug)]
+pub enum AbMethod {
+    /// Voxelized Epipolar Shadow Volumes.
+    Vsv,
+    /// The paper's screen-space Cartesian variant.
+    Cartesian,
+    /// The ray-marching baseline at its default steps and shadow map.
+    Raymarch,
+}
+
+pub fn ab(args: AbArgs) -> Result<()> {
+    let mut scene = match &args.scene {
+        Some(p) => load_scene(p)?,
+        None => builtin_scene(),
+    };
+    if let Some(g) = args.grid {
+        scene.grid = g;
+    }
+    for dir in args.a.iter().chain([&args.b]) {
+        if !dir.is_dir() {
+            bail!("{}: not a folder of shaders", dir.display());
+        }
+    }
+    let ctx = GpuContext::headless()?;
+    // Both renderers on one device: the same adapter, queue and memory for both sides.
+    let side = |dir: Option<&Path>, which: &str| -> Result<Renderer> {
+        let lib = ShaderLibrary::new(dir.map(Path::to_path_buf));
+        let mut r = Renderer::new(ctx.clone(), &lib).with_context(|| format!("the shaders of {which}"))?;
+        args.passes.apply(&mut r);
+        Ok(r)
+    };
+    let mut a = side(args.a.as_deref(), "A")?;
+    let mut b = side(Some(&args.b), "B")?;
+    let method = match args.method {
+        AbMethod::Vsv => GpuMethod::Vsv,
+        AbMethod::Cartesian => GpuMethod::Cartesian,
+        AbMethod::Raymarch => {
+            let steps = epivox::params::Baseline::default().steps;
+            GpuMethod::Raymarch { steps, jitter: false }
+        }
+    };
+    let (w, h) = args.size;
+    let opts = AbOptions {
+        width: w,
+        height: h,
+        method,
+        warmup: args.warmup as usize,
+        frames: args.frames as usize,
+        rounds: args.rounds as usize,
+        progress: !args.json,
+    };
+    let (a_dir, b_dir) = (shader_folder(&a), shader_folder(&b));
+    if !args.json {
+        eprintln!(
+            "ab: {} at {w}x{h} ({:?}, grid {}) on {}, {} rounds of {} frames a side",
+            scene.name,
+            args.method,
+            scene.grid,
+            ctx.adapter_name(),
+            opts.rounds,
+            opts.frames
+        );
+    }
+    let r = ab::run(&mut a, &mut b, &scene, &opts).context("timing A against B")?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&to_json(&r, &a_dir, &b_dir, &ctx.adapter_name()))?);
+    } else {
+        print_table(&r, &a_dir, &b_dir);
+    }
+    Ok(())
+}
+
+/// Where a renderer's shaders come from, in words.
+fn shader_folder(r: &Renderer) -> String {
+    match r.shader_dir() {
+        Some(d) => d.display().to_string(),
+        None => "the shaders built into the binary".into(),
+    }
+}
+
+fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
+    println!("A: {a_dir}");
+    println!("B: {b_dir}");
+    println!("{:<14} {:>10} {:>10} {:>7}", "pass (ms)", "A", "B", "B/A");
+    let mut passes: Vec<_> = r.a.passes.iter().map(|(p, _)| *p).collect();
+    passes.extend(r.b.passes.iter().map(|(p, _)| *p).filter(|p| !r.a.passes.iter().any(|(q, _)| q == p)));
+    let of = |side: &[(epivox::render::Pass, f64)], p| side.iter().find(|(q, _)| *q == p).map(|(_, ms)| *ms);
+    let cell = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |ms| format!("{ms:.2}"));
+    for p in passes {
+        let (x, y) = (of(&r.a.passes, p), of(&r.b.passes, p));
+        let ratio = x.zip(y).filter(|(x, _)| *x > 0.0).map_or_else(|| "-".into(), |(x, y)| format!("{:.3}", y / x));
+        println!("{:<14} {:>10} {:>10} {:>7}", p.to_string(), cell(x), cell(y), ratio);
+    }
+    println!(
+        "{:<14} {:>10.2} {:>10.2} {:>7.3}",
+        "total",
+        r.a.total_ms,
+        r.b.total_ms,
+        r.b.total_ms / r.a.total_ms.max(f64::MIN_POSITIVE)
+    );
+    println!(
+        "{:<14} {:>10.2} {:>10.2} {:>7.3}",
+        "wall",
+        r.a.wall_ms,
+        r.b.wall_ms,
+        r.b.wall_ms / r.a.wall_ms.max(f64::MIN_POSITIVE)
+    );
+    let rounds: Vec<String> = r.a.round_ms.iter().zip(&r.b.round_ms).map(|(a, b)| format!("{a:.1} / {b:.1}")).collect();
+    println!("by round (A / B total ms): {}", rounds.join(", "));
+    if r.a.passes.is_empty() && r.b.passes.is_empty() {
+        println!("(no GPU timestamps on this adapter: only the wall-clock times are measured)");
+    }
+    println!("scattered light: {}", describe(&r.scatter));
+    println!("final image: {}", describe(&r.hdr));
+}
+
+fn describe(images: &AbImages) -> String {
+    match images {
+        AbImages::Same => "the same bits".into(),
+        AbImages::Differ(Some(e)) => {
+            format!("B differs from A: rel RMSE {:.4}%, max abs {:.2e}", 100.0 * e.rel_rmse, e.max_abs)
+        }
+        AbImages::Differ(None) => "B differs from A (A is all zero: no relative error)".into(),
+    }
+}
+
+fn to_json(r: &AbResult, a_dir: &str, b_dir: &str, adapter: &str) -> serde_json::Value {
+    let side = |s: &ab::AbSide, dir: &str| {
+        let passes: serde_json::Map<String, serde_json::Value> =
+            s.passes.iter().map(|(p, ms)| (p.to_string(), serde_json::json!(ms))).collect();
+        serde_json::json!({
+            "shaders": dir,
+            "passes_ms": passes,
+            "total_ms": s.total_ms,
+            "wall_ms": s.wall_ms,
+            "round_ms": s.round_ms,
+        })
+    };
+    let images = |i: &AbImages| match i {
+        AbImages::Same => serde_json::json!({ "same": true }),
+        AbImages::Differ(e) => serde_json::json!({ "same": false, "error": e.map(|e| e.to_json()) }),
+    };
+    serde_json::json!({
+        "adapter": adapter,
+        "a": side(&r.a, a_dir),
+        "b": side(&r.b, b_dir),
+        "scatter": images(&r.scatter),
+        "final": images(&r.hdr),
+    })
+}
