@@ -201,8 +201,8 @@ fn main(
     var rec = records[slot];
     var per_plane = word_groups(f, rec.w >> 16u);
     // The triangle's vertices, loaded again only when the run moves on to the next triangle: a
-    // thread's items are mostly one triangle's planes, and three vector loads per item were 2-4 ms
-    // of the classroom's Voxelize on llvmpipe (session 27; the same bits).
+    // thread's items are mostly one triangle's planes (three vector loads fewer per item; on the
+    // classroom 1-2 ms of Voxelize at best on llvmpipe, at the noise's edge; session 27).
     var tri = triangle(rec.x);
     // The item's index within its triangle's items, followed along the run.
     var within = found.y;
