@@ -55,7 +55,8 @@ pub struct AbSide {
 pub enum AbImages {
     /// Bit for bit the same.
     Same,
-    /// B's error against A (A is the reference); `None` where A's image is all zero.
+    /// B's error against A (A is the reference); `None` where A's image holds non-finite values
+    /// (`metrics::compare` refuses such a reference).
     Differ(Option<ErrorStats>),
 }
 

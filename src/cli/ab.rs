@@ -101,9 +101,9 @@ pub fn ab(args: AbArgs) -> Result<()> {
     let (a_dir, b_dir) = (shader_folder(&a), shader_folder(&b));
     if !args.json {
         eprintln!(
-            "ab: {} at {w}x{h} ({:?}, grid {}) on {}, {} rounds of {} frames a side",
+            "ab: {} at {w}x{h} ({}, grid {}) on {}, {} rounds of {} frames a side",
             scene.name,
-            args.method,
+            format!("{:?}", args.method).to_lowercase(),
             scene.grid,
             ctx.adapter_name(),
             opts.rounds,
@@ -169,7 +169,7 @@ fn describe(images: &AbImages) -> String {
         AbImages::Differ(Some(e)) => {
             format!("B differs from A: rel RMSE {:.4}%, max abs {:.2e}", 100.0 * e.rel_rmse, e.max_abs)
         }
-        AbImages::Differ(None) => "B differs from A (A is all zero: no relative error)".into(),
+        AbImages::Differ(None) => "B differs from A (A holds non-finite values: no error against it)".into(),
     }
 }
 
