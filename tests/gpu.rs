@@ -140,11 +140,12 @@ fn timings_cover_every_pass() {
     assert!(out.total_ms() > 0.0);
 }
 
-/// A broken shader edit is refused with file:line:column and the last good pipelines keep
-/// rendering the same picture; the fixed file loads again.
-#[test]
-fn broken_shader_reload_keeps_the_last_good_pipelines() {
-    let Some(mut r) = renderer() else { return };
+/// Reloads a copy of the shaders with `from` replaced by `to` in `file`, checks that the picture is
+/// the one before the edit whether the reload failed or not (a failed reload keeps the last good
+/// pipelines), that the unedited file loads again, and returns the edited reload's result (`None`
+/// without an adapter).
+fn reload_an_edit(file: &str, from: &str, to: &str) -> Option<Result<(), epivox::gpu::GpuError>> {
+    let mut r = renderer()?;
     let dir = tempfile::tempdir().unwrap();
     for (name, src) in epivox::gpu::shaders_embedded() {
         std::fs::write(dir.path().join(name), src).unwrap();
@@ -153,18 +154,27 @@ fn broken_shader_reload_keeps_the_last_good_pipelines() {
     r.reload(&lib).unwrap();
     let scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
     let before = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
-
-    let path = dir.path().join("integrate.wgsl");
+    let path = dir.path().join(file);
     let good = std::fs::read_to_string(&path).unwrap();
-    std::fs::write(&path, good.replace("let planes = f.grid.x;", "let planes = f.grid.x + ;")).unwrap();
-    let err = r.reload(&lib).unwrap_err().to_string();
-    assert!(err.starts_with("integrate.wgsl:"), "{err}");
-    let during = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
-    assert_eq!(before, during, "the picture changed after a failed reload");
-
+    assert!(good.contains(from), "{file} changed: update this test's edit");
+    std::fs::write(&path, good.replace(from, to)).unwrap();
+    let edited = r.reload(&lib);
+    assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr, "the picture changed");
     std::fs::write(&path, good).unwrap();
     r.reload(&lib).unwrap();
     assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
+    Some(edited)
+}
+
+/// A broken shader edit is refused with file:line:column and the last good pipelines keep
+/// rendering the same picture; the fixed file loads again.
+#[test]
+fn broken_shader_reload_keeps_the_last_good_pipelines() {
+    let Some(edited) = reload_an_edit("integrate.wgsl", "let planes = f.grid.x;", "let planes = f.grid.x + ;") else {
+        return;
+    };
+    let err = edited.unwrap_err();
+    assert!(err.to_string().starts_with("integrate.wgsl:"), "{err}");
 }
 
 /// A panic inside a GPU scope (as naga's SPIR-V back end can throw on a shader its validator
@@ -197,40 +207,17 @@ fn a_panic_inside_a_gpu_scope_is_an_error_and_the_scopes_stay_balanced() {
 /// A shader that naga 30's validator accepts but its SPIR-V back end panics on (a `let` of a
 /// constant vector whose components feed `select`, met in session 27) fails its reload like any
 /// broken edit, and the last good pipelines keep rendering the same picture. (A back end that
-/// compiles it, a fixed naga or another API, reloads it: then only the picture is checked.)
+/// compiles it, a fixed naga or another API, reloads it: the same offsets written another way,
+/// the same picture.)
 #[test]
 fn a_shader_the_compiler_panics_on_fails_its_reload_and_keeps_the_pipelines() {
-    let Some(mut r) = renderer() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    for (name, src) in epivox::gpu::shaders_embedded() {
-        std::fs::write(dir.path().join(name), src).unwrap();
-    }
-    let lib = epivox::gpu::ShaderLibrary::new(Some(dir.path().to_path_buf()));
-    r.reload(&lib).unwrap();
-    let scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));
-    let before = r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr;
-
-    let path = dir.path().join("common.wgsl");
-    let good = std::fs::read_to_string(&path).unwrap();
-    let old = "    return select(-0.25, 0.25, (x & 1u) == 1u);";
-    assert!(good.contains(old), "bin_offset changed: update this test's edit");
     let crashing = "    let t = vec4f(-0.25, 0.25, -0.25, 0.25);\n    let i = x & 3u;\n    \
                     return select(select(t.x, t.y, i == 1u), select(t.z, t.w, i == 3u), i >= 2u);";
-    std::fs::write(&path, good.replace(old, crashing)).unwrap();
-    match r.reload(&lib) {
-        Err(e) => {
-            assert!(matches!(e, epivox::gpu::GpuError::Panicked { .. }), "{e}");
-            assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr, "the picture changed");
-        }
-        // The same offsets, written another way: the same picture.
-        Ok(()) => {
-            eprintln!("this back end compiles the shader naga 30's SPIR-V writer panicked on");
-            assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr, "the picture changed");
-        }
+    match reload_an_edit("common.wgsl", "    return select(-0.25, 0.25, (x & 1u) == 1u);", crashing) {
+        None => {}
+        Some(Err(e)) => assert!(matches!(e, epivox::gpu::GpuError::Panicked { .. }), "{e}"),
+        Some(Ok(())) => eprintln!("this back end compiles the shader naga 30's SPIR-V writer panicked on"),
     }
-    std::fs::write(&path, good).unwrap();
-    r.reload(&lib).unwrap();
-    assert_eq!(before, r.render(&scene, 48, 48, Method::Vsv).unwrap().hdr);
 }
 
 /// A VSV frame of `scene`, where its view rays end, and the reference integrated along those same

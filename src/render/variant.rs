@@ -385,55 +385,31 @@ mod tests {
         assert_eq!(sun.with_grid(true, false).to_string(), "directional light, isotropic, grey medium, cartesian grid");
     }
 
-    /// Whether the grid's rays start on four words changes Integrate's pipeline only.
+    /// Whether the grid's rays start on four words, and whether the surfaces' shadows come from
+    /// the grid, change Integrate's pipeline only, and neither is in the name users see.
     #[test]
-    fn only_integrate_specialises_to_the_rays_alignment() {
+    fn only_integrate_specialises_to_the_rays_alignment_and_grid_shadows() {
         let sun = Variant::new(false, &Phase::Isotropic, GREY);
-        let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
-        let mut integrate = VariantPipelines::new(Specialised::All);
-        let mut labels = Vec::new();
-        for v in [sun, sun.with_quad_rays(false)] {
-            voxels.prepare(v, |c, _| assert_eq!(c[5], ("QUAD_RAYS", 1.0)));
-            integrate.prepare(v, |c, label| {
-                assert_eq!(c[5], ("QUAD_RAYS", if v.quad_rays { 1.0 } else { 0.0 }));
-                labels.push(label.to_string());
-            });
+        for (other, i, name, (base, changed), suffix) in [
+            (sun.with_quad_rays(false), 5, "QUAD_RAYS", (1.0, 0.0), ", rays off four words"),
+            (sun.with_grid_shadows(true), 6, "GRID_SHADOWS", (0.0, 1.0), ", grid shadows"),
+        ] {
+            let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
+            let mut integrate = VariantPipelines::new(Specialised::All);
+            let mut labels = Vec::new();
+            for v in [sun, other] {
+                voxels.prepare(v, |c, _| assert_eq!(c[i], (name, base)));
+                integrate.prepare(v, |c, label| {
+                    assert_eq!(c[i], (name, if v == sun { base } else { changed }));
+                    labels.push(label.to_string());
+                });
+            }
+            assert_eq!(voxels.variants().count(), 1, "{name}");
+            assert_eq!(integrate.variants().count(), 2, "{name}");
+            let plain = "[directional light, isotropic, grey medium".to_string();
+            assert_eq!(labels, [format!("{plain}]"), format!("{plain}{suffix}]")]);
+            assert_eq!(other.to_string(), sun.to_string(), "{name}: not in the name users see");
         }
-        assert_eq!(voxels.variants().count(), 1);
-        assert_eq!(integrate.variants().count(), 2);
-        assert_eq!(
-            labels,
-            [
-                "[directional light, isotropic, grey medium]",
-                "[directional light, isotropic, grey medium, rays off four words]"
-            ]
-        );
-        assert_eq!(sun.with_quad_rays(false).to_string(), sun.to_string(), "not in the name users see");
-    }
-
-    /// Whether the surfaces' shadows come from the grid changes Integrate's pipeline only.
-    #[test]
-    fn only_integrate_specialises_to_grid_shadows() {
-        let sun = Variant::new(false, &Phase::Isotropic, GREY);
-        let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
-        let mut integrate = VariantPipelines::new(Specialised::All);
-        let mut labels = Vec::new();
-        for v in [sun, sun.with_grid_shadows(true)] {
-            voxels.prepare(v, |c, _| assert_eq!(c[6], ("GRID_SHADOWS", 0.0)));
-            integrate.prepare(v, |c, label| {
-                assert_eq!(c[6], ("GRID_SHADOWS", if v.grid_shadows { 1.0 } else { 0.0 }));
-                labels.push(label.to_string());
-            });
-        }
-        assert_eq!(voxels.variants().count(), 1);
-        assert_eq!(integrate.variants().count(), 2);
-        assert_eq!(
-            labels,
-            [
-                "[directional light, isotropic, grey medium]",
-                "[directional light, isotropic, grey medium, grid shadows]"
-            ]
-        );
     }
 
     const GREY: [f32; 3] = [0.09, 0.09, 0.09];
