@@ -177,6 +177,17 @@ fn broken_shader_reload_keeps_the_last_good_pipelines() {
     assert!(err.to_string().starts_with("integrate.wgsl:"), "{err}");
 }
 
+/// A shader folder from an older build, whose common.wgsl lacks a pipeline constant this build
+/// sets, is refused with what to do about it, and the picture stays. (The edit keeps the name as a
+/// plain constant, so that the WGSL still validates, as an old folder's does.)
+#[test]
+fn a_shader_folder_missing_a_pipeline_constant_says_how_to_fix_it() {
+    let line = "override GRID_SHADOWS: bool = false;";
+    let Some(edited) = reload_an_edit("common.wgsl", line, "const GRID_SHADOWS: bool = false;") else { return };
+    let err = edited.unwrap_err().to_string();
+    assert!(err.contains("GRID_SHADOWS") && err.contains("older than this build"), "{err}");
+}
+
 /// A panic inside a GPU scope (as naga's SPIR-V back end can throw on a shader its validator
 /// accepted) comes back as an error naming what was being done, and the device's error scopes
 /// stay balanced: the next scope still catches its own validation error, and the one after that

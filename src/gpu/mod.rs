@@ -39,6 +39,19 @@ pub enum GpuError {
     Panicked { during: String, message: String },
 }
 
+/// A validation message, with what to do where the cause is known: a shader folder copied from an
+/// older build lacks the `override` constants this build sets on every pipeline
+/// (`render/variant.rs`), and wgpu only says that one is "not found in the shader".
+fn with_hint(message: String) -> String {
+    if message.contains("pipeline-overridable constant") && message.contains("not found") {
+        return format!(
+            "{message}\n(the shader folder is older than this build: add the `override` lines of \
+             this build's shaders/common.wgsl to the folder's common.wgsl)"
+        );
+    }
+    message
+}
+
 /// The text of a caught panic.
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload
@@ -268,7 +281,7 @@ impl GpuContext {
         })?;
         match caught {
             None => Ok(value),
-            Some(e) => Err(GpuError::Validation { during: during.to_string(), message: e.to_string() }),
+            Some(e) => Err(GpuError::Validation { during: during.to_string(), message: with_hint(e.to_string()) }),
         }
     }
 }
