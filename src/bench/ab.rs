@@ -3,8 +3,9 @@
 //! whether the two images differ.
 //!
 //! ```text
-//! shaders A ──► renderer A ─┐ round r: A's frames then B's (r even), B's then A's (r odd)
-//! shaders B ──► renderer B ─┘   ──► per pass: the median over every round's frames
+//! shaders A ──► renderer A ─┐ round r: A's frames then B's (r even), B's then A's (r odd),
+//! shaders B ──► renderer B ─┘   each side's first frame after the other's untimed
+//!                               ──► per pass: the median over every round's frames
 //! then one frame each, read back ──► the same bits, or B's error against A (metrics::compare)
 //! ```
 //!
