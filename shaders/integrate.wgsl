@@ -338,9 +338,9 @@ fn own_shadow_start(t_s: f32, gamma: f32, z_scale: f32, back: f32, z_start: f32)
 //
 // The surface point P at the end of the view ray sees the light where no caster lies on its light
 // ray before it, which is what the shadow volume holds. V = the lit fraction of the bins around
-// P's z: on each of four planes around the pixel's angle the two bin samples around P's z, blended
-// linearly, and the planes weighted by a tent two planes wide either side (SURFACE_PLANES): a 4x2
-// filter, like a shadow map's percentage-closer one. Each of the eight sample light rays (its
+// P's z: on each of four planes around the pixel's angle the two bin samples around P's z, with a
+// ramp half a bin wide between them (SURFACE_RAMP), and the planes weighted by a tent two planes
+// wide either side (SURFACE_PLANES): a 4x2 filter, like a shadow map's percentage-closer one. Each of the eight sample light rays (its
 // plane's centre, its bin's centre z_k) is read on the ray cell before the one holding the point
 // where it meets the surface: the cell's bits hold every caster up to its end (inclusive scan), and
 // the surface's own voxels lie in the cell after.
@@ -411,7 +411,9 @@ fn sample_lit(x: u32, m: vec3f, j: u32, offset: f32) -> f32 {
 // Against curvature: the classroom's whole image at 0, 0.1, 0.25 and 0.5: 67.4, 66.7, 66.7, 67.1%.
 const MARGIN: f32 = 0.25;
 
-// One plane's lit fraction at bin coordinate b: its two bin samples around b, blended linearly.
+// One plane's lit fraction at bin coordinate b: its two bin samples around b, the step between
+// them a ramp SURFACE_RAMP bins wide halfway between them. (Reading only the nearer sample
+// outside the ramp gave the same bits and no measurable gain on llvmpipe.)
 fn plane_lit(x: u32, b: f32) -> f32 {
     let offset = bin_offset(x);
     let u = b - 0.5 - offset;
@@ -421,8 +423,18 @@ fn plane_lit(x: u32, b: f32) -> f32 {
     let hi = u32(clamp(j + 1.0, 0.0, top));
     let phi = phi_of_plane(f, f32(x) + 0.5);
     let m = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
-    return mix(sample_lit(x, m, lo, offset), sample_lit(x, m, hi, offset), u - j);
+    let t = clamp((u - j - 0.5) / SURFACE_RAMP + 0.5, 0.0, 1.0);
+    return mix(sample_lit(x, m, lo, offset), sample_lit(x, m, hi, offset), t);
 }
+
+// The width of a plane's step between two bin samples, in bins. A linear blend over the whole bin
+// (1.0) is the best guess from two samples alone, but the tent over four planes (SURFACE_PLANES)
+// averages samples of both phases, half a bin apart, and then smeared each shadow edge over a
+// bin and a half. The classroom's whole image against the reference (docs/results.md, session 27):
+// 1.0 62.99%, 0.67 61.21%, 0.5 60.92%, 0.33 61.30%, a smoothstep over the bin 61.60%. At 0.5 the
+// grid 2048x384x1280 gives 50.53% (the map 50.75%), 1024^2 56.66% (58.85% with 1.0), and the
+// built-in room 13.85% (14.59% with 1.0, the map 14.35%).
+const SURFACE_RAMP: f32 = 0.5;
 
 // The step from pixel p's point to its neighbour along `step` (either side: the one nearer in
 // distance, which is on the same surface unless both are off it), and 1 in w; 0 where neither
@@ -483,9 +495,9 @@ fn surface_visibility(p: vec2i, v: vec3f, t_s: f32, gamma: f32, cos_i: f32, x: v
 // The tent's half-width in planes. A shadow edge across the bins sits somewhere between two bin
 // samples, and the planes on either side sample it at staggered bins (bin_offset): a tent over
 // four planes averages two samples of each phase where two planes gave one, which turns the
-// dotted edges of the classroom's sunlit floor into lines (docs/results.md, session 27: the whole
-// image 66.65 -> 62.99% off the reference at the default grid, 54.41 -> 51.97% at 2048x384x1280;
-// 1.5 planes 63.36%, 3 planes 63.56%, 4 planes 64.64%). The planes are finer than the pixels (two
+// dotted edges of the classroom's sunlit floor into lines (docs/results.md, session 27, with a
+// linear blend between bins: the whole image 66.65 -> 62.99% off the reference at the default
+// grid, 54.41 -> 51.97% at 2048x384x1280; 1.5 planes 63.36%, 3 planes 63.56%, 4 planes 64.64%). The planes are finer than the pixels (two
 // to four per pixel on the classroom at 512^2), so the wider tent spans about a pixel; at 1024^2,
 // with half as many planes per pixel, it still helped (62.10 -> 58.85%).
 const SURFACE_PLANES: f32 = 2.0;

@@ -372,7 +372,7 @@ pub struct Renderer {
     /// (Integrate reads them from the same bits: `integrate.wgsl`, "surface shadows"), and draw no
     /// shadow map at all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The
     /// scattered light is the same; the surfaces' shadows are as sharp as the grid's bins (the
-    /// classroom's whole image at 512x512 and the default grid: 63.0% relative RMSE against the
+    /// classroom's whole image at 512x512 and the default grid: 60.9% relative RMSE against the
     /// reference, where the 2048 map gives 50.8% and a 1024 map 78%; docs/results.md, sessions 25
     /// and 27).
     /// Off by default (quality first); on, a GPU that rasterizes on few units saves the map
