@@ -484,15 +484,16 @@ fn surface_visibility(p: vec2i, v: vec3f, t_s: f32, gamma: f32, cos_i: f32, x: v
     let exact = dx.w > 0.0 && dy.w > 0.0 && cos_i > 0.0625 && abs(dot(n, w) - cos_i) < 0.05;
     sp = SurfacePoint(pos, n, exact, reach, s);
     // Four planes, x0 - 1 to x1 + 1, weighted by a tent SURFACE_PLANES planes wide either side of
-    // the pixel's angle (its weights sum to 2 for every fx).
+    // the pixel's angle.
     let t = max(vec4f(0.0), 1.0 - abs(vec4f(-1.0, 0.0, 1.0, 2.0) - weights.y) / SURFACE_PLANES);
     var vis = t.y * plane_lit(x.x, b) + t.z * plane_lit(x.y, b);
     if (t.x > 0.0) { vis += t.x * plane_lit(plane_beside(x.x, -1), b); }
     if (t.w > 0.0) { vis += t.w * plane_lit(plane_beside(x.y, 1), b); }
-    return 0.5 * vis;
+    return vis / dot(t, vec4f(1.0));
 }
 
-// The tent's half-width in planes. A shadow edge across the bins sits somewhere between two bin
+// The tent's half-width in planes, at most 2 (four planes are read; at 2 their weights sum to 2
+// for every position between the planes). A shadow edge across the bins sits somewhere between two bin
 // samples, and the planes on either side sample it at staggered bins (bin_offset): a tent over
 // four planes averages two samples of each phase where two planes gave one, which turns the
 // dotted edges of the classroom's sunlit floor into lines (docs/results.md, session 27, with a
