@@ -11,7 +11,9 @@
 # (`--grid`): on the software driver every 100 MB grid shape stops near 1% (docs/results.md,
 # "Where the classroom's remaining error lies"), and a GPU can show whether more bits get VSV
 # below the 1024-step march's 0.76% (the chase then finds a finer march to compare with); with
-# 2048x384x1280 (on llvmpipe as fast as the default and 10% more accurate, session 26) and
+# 2048x384x1280 (on llvmpipe as fast as the default and 10% more accurate, session 26; with grid
+# shadows more accurate than the default map frame on both errors, session 27: the candidate new
+# default once its GPU time is known) and
 # 2048x512x2048 (more bins, which bought the most so far: 2048x512x1536 measured 0.780%). The
 # renders, the 512x512 classroom bench, the bunny and the scaling sweep run once more with VSV's
 # surface shadows from the shadow volume (`--surface-shadows grid`: no shadow map in its frames).

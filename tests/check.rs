@@ -86,10 +86,7 @@ fn planted_shader_regression_fails_the_check() {
     let shipped = check::run(Some(&mut r), std::slice::from_ref(&case), &opts, |_| {}).unwrap();
     assert!(shipped.passed(), "{}", shipped.table());
 
-    let dir = tempfile::tempdir().unwrap();
-    for (name, src) in epivox::gpu::shaders_embedded() {
-        std::fs::write(dir.path().join(name), src).unwrap();
-    }
+    let dir = common::shader_copy();
     let path = dir.path().join("integrate.wgsl");
     let good = std::fs::read_to_string(&path).unwrap();
     let combined = "let scale = exp(log(max(pre, vec3f(1e-38))) - f.sigma_t.xyz * f.axis.w);";

@@ -1,6 +1,8 @@
 //! The `epivox` binary end to end: good runs produce files and JSON; every bad input gets one clear
 //! message naming the file or flag, and a non-zero exit, never a panic.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -302,14 +304,8 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     if !has_adapter() {
         return;
     }
-    let dir = tempfile::tempdir().unwrap();
-    let (same, edited) = (dir.path().join("same"), dir.path().join("edited"));
-    for d in [&same, &edited] {
-        std::fs::create_dir(d).unwrap();
-        for (name, src) in epivox::gpu::shaders_embedded() {
-            std::fs::write(d.join(name), src).unwrap();
-        }
-    }
+    let (same_dir, edited_dir) = (common::shader_copy(), common::shader_copy());
+    let (same, edited) = (same_dir.path(), edited_dir.path());
     // Half the scattered light: a change of the image, not of the work.
     let integrate = edited.join("integrate.wgsl");
     let src = std::fs::read_to_string(&integrate).unwrap();
@@ -340,18 +336,18 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
         assert!(o.status.success(), "{}", stderr(&o));
         serde_json::from_slice(&o.stdout).expect("stdout is one JSON object")
     };
-    let j = run(&same, &same);
+    let j = run(same, same);
     assert_eq!(j["scatter"]["same"], true, "{j}");
     assert_eq!(j["final"]["same"], true, "{j}");
     assert_eq!(j["a"]["round_ms"].as_array().map(Vec::len), Some(2), "{j}");
     assert!(j["a"]["total_ms"].as_f64().is_some_and(|t| t >= 0.0), "{j}");
-    let j = run(&same, &edited);
+    let j = run(same, edited);
     assert_eq!(j["scatter"]["same"], false, "{j}");
     // B = A / 2 exactly (a power of two): the RMSE is half A's root mean square, which is at
     // least A's mean, so the relative RMSE is at least 50% (equal only for a flat image).
     let err = j["scatter"]["error"]["rel_rmse"].as_f64().expect("an error against A");
     assert!(err > 0.4999 && err < 5.0, "{j}");
-    let missing = dir.path().join("no-such-folder");
+    let missing = same.join("no-such-folder");
     let err = fails(&["ab", "--b", missing.to_str().unwrap(), "--size", "16x16"], &[]);
     assert!(err.contains("no-such-folder") && err.contains("not a folder"), "{err}");
 }

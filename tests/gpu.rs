@@ -146,10 +146,7 @@ fn timings_cover_every_pass() {
 /// without an adapter).
 fn reload_an_edit(file: &str, from: &str, to: &str) -> Option<Result<(), epivox::gpu::GpuError>> {
     let mut r = renderer()?;
-    let dir = tempfile::tempdir().unwrap();
-    for (name, src) in epivox::gpu::shaders_embedded() {
-        std::fs::write(dir.path().join(name), src).unwrap();
-    }
+    let dir = shader_copy();
     let lib = epivox::gpu::ShaderLibrary::new(Some(dir.path().to_path_buf()));
     r.reload(&lib).unwrap();
     let scene = occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1)));

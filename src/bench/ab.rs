@@ -14,12 +14,11 @@
 //! (docs/results.md): rounds that alternate which side goes first put a drift on both sides alike,
 //! and the per-round totals show how large it was.
 
-use super::{median, style, BenchError};
+use super::{style, time_frames, BenchError, Frames, Point, Timing};
 use crate::metrics::{self, ErrorStats};
-use crate::render::{Method, Pass, Renderer};
+use crate::render::{Method, Renderer};
 use crate::scene::Scene;
 use crate::Image;
-use std::time::Instant;
 
 /// How the two sides are timed.
 #[derive(Debug, Clone)]
@@ -39,14 +38,11 @@ pub struct AbOptions {
 /// One side's measurements and images.
 #[derive(Debug, Clone)]
 pub struct AbSide {
-    /// Each pass that ran and the median of its GPU time (ms) over all the timed frames.
-    pub passes: Vec<(Pass, f64)>,
-    /// The median of the frames' summed pass times (ms; 0 without GPU timestamps).
-    pub total_ms: f64,
+    /// Per pass, the total and per round: medians over all the timed frames (GPU timestamps; wall
+    /// clock without them, `passes` then empty), as the bench's.
+    pub timing: Timing,
     /// The median wall-clock time of a frame, from recording to the GPU's end (ms).
     pub wall_ms: f64,
-    /// The median total of each round alone (ms).
-    pub round_ms: Vec<f64>,
     pub scatter: Image,
     pub hdr: Image,
 }
@@ -80,52 +76,45 @@ pub struct AbResult {
 
 /// Times `a` and `b` on `scene` (see the module's header) and compares their last frames.
 pub fn run(a: &mut Renderer, b: &mut Renderer, scene: &Scene, opts: &AbOptions) -> Result<AbResult, BenchError> {
-    let (w, h, method) = (opts.width, opts.height, opts.method);
+    let (w, h) = (opts.width, opts.height);
     let frames = opts.frames.max(1);
     let rounds = opts.rounds.max(1);
     let bar = style((2 * (opts.warmup + rounds * (frames + 1))) as u64, opts.progress);
     bar.set_prefix("ab");
+    let mut work = scene.clone();
     // Whole frames: a frame that took its shadow volume from the one before would time nothing.
+    // Each side keeps its own shadow-map size (time_frames sets the point's).
+    let mut points = Vec::with_capacity(2);
     for r in [&mut *a, &mut *b] {
         r.reuse_unchanged = false;
+        points.push(Point { method: opts.method, grid: scene.grid, shadow_map: r.shadow_map_size() });
     }
     for (name, r) in [("A", &mut *a), ("B", &mut *b)] {
         bar.set_message(format!("warming up {name}"));
         for _ in 0..opts.warmup {
-            r.render_frame(scene, w, h, method)?;
+            r.render_frame(scene, w, h, opts.method)?;
             bar.inc(1);
         }
     }
-    let mut timed: [Vec<TimedFrame>; 2] = [Vec::new(), Vec::new()];
+    let mut timed = [Frames::default(), Frames::default()];
     for round in 0..rounds {
         let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
         for side in order {
             let r = if side == 0 { &mut *a } else { &mut *b };
             bar.set_message(format!("round {} of {rounds}, {}", round + 1, ["A", "B"][side]));
-            // The first frame after the other side's is not timed: timed, the side that more often
-            // followed the other read 3% slower on the very same shaders (llvmpipe, session 27).
-            r.render_frame(scene, w, h, method)?;
-            bar.inc(1);
-            for _ in 0..frames {
-                let started = Instant::now();
-                let info = r.render_frame(scene, w, h, method)?;
-                // (Reading the timestamps waits for the frame; without them this does.)
-                r.ctx.wait()?;
-                let wall = started.elapsed().as_secs_f64() * 1e3;
-                timed[side].push(TimedFrame {
-                    round,
-                    wall,
-                    passes: info.timings.iter().map(|t| (t.pass, t.ms)).collect(),
-                });
-                bar.inc(1);
-            }
+            // The first frame after the other side's is not timed (time_frames' warm-up): timed,
+            // the side that more often followed the other read 3% slower on the very same shaders
+            // (llvmpipe, session 27).
+            let (more, _) = time_frames(r, &mut work, w, h, &points[side], 1, frames)?;
+            timed[side].pool(more);
+            bar.inc(frames as u64 + 1);
         }
     }
     bar.finish_and_clear();
     let mut sides = Vec::with_capacity(2);
     for (r, frames) in [(&mut *a, &timed[0]), (&mut *b, &timed[1])] {
-        let out = r.render(scene, w, h, method)?;
-        sides.push(side(frames, rounds, out.scatter, out.hdr));
+        let out = r.render(scene, w, h, opts.method)?;
+        sides.push(side(frames, r.ctx.timestamps, out.scatter, out.hdr));
     }
     let (Some(b_side), Some(a_side)) = (sides.pop(), sides.pop()) else { unreachable!("two sides") };
     Ok(AbResult {
@@ -136,47 +125,15 @@ pub fn run(a: &mut Renderer, b: &mut Renderer, scene: &Scene, opts: &AbOptions) 
     })
 }
 
-/// A timed frame: the round it belongs to, its wall-clock time and its passes' GPU times (ms).
-struct TimedFrame {
-    round: usize,
-    wall: f64,
-    passes: Vec<(Pass, f64)>,
-}
-
-/// One side's medians from its timed frames.
-fn side(frames: &[TimedFrame], rounds: usize, scatter: Image, hdr: Image) -> AbSide {
-    // The passes in the order the frames ran them (a pass run per chunk counts once, summed).
-    let mut order: Vec<Pass> = Vec::new();
-    for f in frames {
-        for (p, _) in &f.passes {
-            if !order.contains(p) {
-                order.push(*p);
-            }
-        }
-    }
-    let time_of = |f: &TimedFrame, p: Pass| f.passes.iter().filter(|(q, _)| *q == p).map(|(_, ms)| ms).sum();
-    let passes = order
-        .iter()
-        .map(|&p| {
-            let ran = frames.iter().filter(|f| f.passes.iter().any(|(q, _)| *q == p));
-            (p, median(ran.map(|f| time_of(f, p)).collect()))
-        })
-        .collect();
-    let total = |f: &TimedFrame| f.passes.iter().map(|(_, ms)| ms).sum::<f64>();
-    let round_ms = (0..rounds).map(|r| median(frames.iter().filter(|f| f.round == r).map(total).collect())).collect();
-    AbSide {
-        passes,
-        total_ms: median(frames.iter().map(total).collect()),
-        wall_ms: median(frames.iter().map(|f| f.wall).collect()),
-        round_ms,
-        scatter,
-        hdr,
-    }
+/// One side's medians from its pooled frames.
+fn side(frames: &Frames, timestamps: bool, scatter: Image, hdr: Image) -> AbSide {
+    AbSide { timing: frames.timing(timestamps), wall_ms: frames.timing(false).total_ms, scatter, hdr }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::Pass;
 
     fn image(v: f32) -> Image {
         Image::from_pixels(2, 1, vec![[v, 1.0, 1.0], [1.0, 1.0, 1.0]]).unwrap()
@@ -195,16 +152,18 @@ mod tests {
 
     #[test]
     fn medians_are_per_pass_over_all_frames_and_per_round_of_totals() {
-        let frame = |round, s: f64, v: f64| TimedFrame {
-            round,
-            wall: 2.0 * (s + v),
-            passes: vec![(Pass::Surface, s), (Pass::Voxelize, v)],
+        let round = |frames: &[(f64, f64)]| Frames {
+            passes: frames.iter().map(|&(s, v)| vec![(Pass::Surface, s), (Pass::Voxelize, v)]).collect(),
+            wall: frames.iter().map(|&(s, v)| 2.0 * (s + v)).collect(),
+            rounds: vec![frames.len()],
         };
-        let frames = vec![frame(0, 1.0, 10.0), frame(0, 3.0, 30.0), frame(1, 2.0, 20.0), frame(1, 5.0, 50.0)];
-        let s = side(&frames, 2, image(0.0), image(0.0));
-        assert_eq!(s.passes, vec![(Pass::Surface, 2.5), (Pass::Voxelize, 25.0)]);
-        assert_eq!(s.total_ms, 27.5);
+        let mut frames = Frames::default();
+        frames.pool(round(&[(1.0, 10.0), (3.0, 30.0)]));
+        frames.pool(round(&[(2.0, 20.0), (5.0, 50.0)]));
+        let s = side(&frames, true, image(0.0), image(0.0));
+        assert_eq!(s.timing.passes, vec![(Pass::Surface, 2.5), (Pass::Voxelize, 25.0)]);
+        assert_eq!(s.timing.total_ms, 27.5);
         assert_eq!(s.wall_ms, 55.0);
-        assert_eq!(s.round_ms, vec![22.0, 38.5]);
+        assert_eq!(s.timing.round_ms, vec![22.0, 38.5]);
     }
 }

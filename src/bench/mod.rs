@@ -409,6 +409,13 @@ struct Frames {
 }
 
 impl Frames {
+    /// Adds `more` as one more round.
+    fn pool(&mut self, more: Frames) {
+        self.rounds.push(more.wall.len());
+        self.passes.extend(more.passes);
+        self.wall.extend(more.wall);
+    }
+
     /// Medians over the frames: GPU timestamps where the adapter has them, else wall clock.
     fn timing(&self, timestamps: bool) -> Timing {
         let frames = self.wall.len();
@@ -810,9 +817,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
             bar.set_message(format!("round {round} of {}: {name} {setting}", opts.rounds));
             match time_frames(renderer, &mut work, w, h, &row.point, opts.warmup, frames) {
                 Ok((more, _)) => {
-                    pooled.rounds.push(more.wall.len());
-                    pooled.passes.extend(more.passes);
-                    pooled.wall.extend(more.wall);
+                    pooled.pool(more);
                     row.timing = pooled.timing(timestamps);
                 }
                 Err(e) => notes

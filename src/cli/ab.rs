@@ -131,21 +131,21 @@ fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
     println!("A: {a_dir}");
     println!("B: {b_dir}");
     println!("{:<14} {:>10} {:>10} {:>7}", "pass (ms)", "A", "B", "B/A");
-    let mut passes: Vec<_> = r.a.passes.iter().map(|(p, _)| *p).collect();
-    passes.extend(r.b.passes.iter().map(|(p, _)| *p).filter(|p| !r.a.passes.iter().any(|(q, _)| q == p)));
+    let mut passes: Vec<_> = r.a.timing.passes.iter().map(|(p, _)| *p).collect();
+    passes.extend(r.b.timing.passes.iter().map(|(p, _)| *p).filter(|p| !r.a.timing.passes.iter().any(|(q, _)| q == p)));
     let of = |side: &[(epivox::render::Pass, f64)], p| side.iter().find(|(q, _)| *q == p).map(|(_, ms)| *ms);
     let cell = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |ms| format!("{ms:.2}"));
     for p in passes {
-        let (x, y) = (of(&r.a.passes, p), of(&r.b.passes, p));
+        let (x, y) = (of(&r.a.timing.passes, p), of(&r.b.timing.passes, p));
         let ratio = x.zip(y).filter(|(x, _)| *x > 0.0).map_or_else(|| "-".into(), |(x, y)| format!("{:.3}", y / x));
         println!("{:<14} {:>10} {:>10} {:>7}", p.to_string(), cell(x), cell(y), ratio);
     }
     println!(
         "{:<14} {:>10.2} {:>10.2} {:>7.3}",
         "total",
-        r.a.total_ms,
-        r.b.total_ms,
-        r.b.total_ms / r.a.total_ms.max(f64::MIN_POSITIVE)
+        r.a.timing.total_ms,
+        r.b.timing.total_ms,
+        r.b.timing.total_ms / r.a.timing.total_ms.max(f64::MIN_POSITIVE)
     );
     println!(
         "{:<14} {:>10.2} {:>10.2} {:>7.3}",
@@ -154,9 +154,10 @@ fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
         r.b.wall_ms,
         r.b.wall_ms / r.a.wall_ms.max(f64::MIN_POSITIVE)
     );
-    let rounds: Vec<String> = r.a.round_ms.iter().zip(&r.b.round_ms).map(|(a, b)| format!("{a:.1} / {b:.1}")).collect();
+    let rounds: Vec<String> =
+        r.a.timing.round_ms.iter().zip(&r.b.timing.round_ms).map(|(a, b)| format!("{a:.1} / {b:.1}")).collect();
     println!("by round (A / B total ms): {}", rounds.join(", "));
-    if r.a.passes.is_empty() && r.b.passes.is_empty() {
+    if r.a.timing.passes.is_empty() && r.b.timing.passes.is_empty() {
         println!("(no GPU timestamps on this adapter: only the wall-clock times are measured)");
     }
     println!("scattered light: {}", describe(&r.scatter));
@@ -176,13 +177,13 @@ fn describe(images: &AbImages) -> String {
 fn to_json(r: &AbResult, a_dir: &str, b_dir: &str, adapter: &str) -> serde_json::Value {
     let side = |s: &ab::AbSide, dir: &str| {
         let passes: serde_json::Map<String, serde_json::Value> =
-            s.passes.iter().map(|(p, ms)| (p.to_string(), serde_json::json!(ms))).collect();
+            s.timing.passes.iter().map(|(p, ms)| (p.to_string(), serde_json::json!(ms))).collect();
         serde_json::json!({
             "shaders": dir,
             "passes_ms": passes,
-            "total_ms": s.total_ms,
+            "total_ms": s.timing.total_ms,
             "wall_ms": s.wall_ms,
-            "round_ms": s.round_ms,
+            "round_ms": s.timing.round_ms,
         })
     };
     let images = |i: &AbImages| match i {

@@ -83,3 +83,13 @@ pub fn dump(name: &str, img: &Image) {
         let _ = scaled.write_png(std::path::Path::new(&dir).join(format!("{name}.png")), 0.0);
     }
 }
+
+/// A temporary folder holding a copy of the shaders built into the binary, to edit and load with
+/// `ShaderLibrary::new` (the folder goes when the value drops).
+pub fn shader_copy() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, src) in epivox::gpu::shaders_embedded() {
+        std::fs::write(dir.path().join(name), src).unwrap();
+    }
+    dir
+}
