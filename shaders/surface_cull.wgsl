@@ -1,5 +1,5 @@
-// surface_cull.wgsl: the eye's triangles that would draw nothing, made empty before Surface draws
-// (the Surface pass, `src/render/surface.rs`).
+// surface_cull.wgsl: the eye's draw list without the triangles that would draw nothing, made
+// before Surface draws (the Surface pass, `src/render/surface.rs`).
 //
 // The rasterizer writes a pixel only where a triangle covers the pixel's centre (i + 1/2, j + 1/2).
 // A triangle in front of the eye (w > 0 at its three vertices; the part the near plane leaves is
@@ -15,13 +15,22 @@
 //   side * n . (eye - p0) < -t |n| |eye - p0|,   t = FACING_TOL = 1e-3,
 //
 // a margin for the rasterizer's snapping of vertices to 1/256 pixel, which turns a face over
-// about two pixels across by less than that). Such a triangle is listed as (i0, i0, i0): zero area, which the rasterizer
-// drops before setting it up, and which costs one vertex instead of three. Every other
-// triangle is copied as it is, in its place: the runs draw the same ranges in the same order, so
-// the targets are the same, bit for bit. Scenes of tessellated or scanned meshes hold mostly such
-// triangles (the bench's million-triangle room at 512x512: 61% cover no pixel centre and half of
-// the rest face away, 81% in all; the classroom: 66%), and on llvmpipe the vertex work before the rasterizer's own tests runs on
-// one thread, while this pass runs on all of them.
+// about two pixels across by less than that). Scenes of tessellated or scanned meshes hold mostly
+// such triangles (the bench's million-triangle room at 512x512: 61% cover no pixel centre and half
+// of the rest face away, 81% in all; the classroom: 66%).
+//
+// The others are compacted in their order, so that Surface draws the same triangles in the same
+// order and its targets are the same, bit for bit (a tie in depth keeps the first drawn): an
+// exclusive prefix sum of the kept counts gives each kept triangle t its place
+//
+//   place(t) = sum of keep(s) over s < t,
+//
+// and run r of meshes (triangles [s_r, e_r)) draws indices 3 place(s_r) .. 3 place(e_r). Three
+// steps: `mark` (a thread per 16 triangles, a workgroup per block of 1024: the kept triangles as a
+// bit mask per thread and their prefix within the block), `places` (one workgroup: the blocks'
+// prefix, and the runs' indirect draw arguments) and `compact` (the copies). Emptying them in place
+// as (i0, i0, i0) instead (sessions 20-27) left llvmpipe's single-threaded primitive assembly ~26 ns
+// per emptied triangle: 21 ms of Surface's 63 at a million triangles.
 
 #import common
 
@@ -29,13 +38,24 @@
 // The scene's vertex buffer: [x, y, z, r, g, b] per vertex.
 @group(0) @binding(1) var<storage, read> vertices: array<f32>;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
-// The indices Surface draws: `indices` with the triangles that cover no centre emptied.
+// The indices Surface draws: the kept triangles of `indices`, in their order.
 @group(0) @binding(3) var<storage, read_write> lists: array<u32>;
 // Per triangle: its mesh.
 @group(0) @binding(4) var<storage, read> triangle_meshes: array<u32>;
 // Per mesh: +1 Surface draws only the faces whose winding normal (b - a) x (c - a) faces the eye,
 // -1 only those facing away, 0 all (SceneGpu::eye_sides, the pipelines' cull modes).
 @group(0) @binding(5) var<storage, read> sides: array<f32>;
+// Per thread of `mark` (16 triangles): the kept ones as bits, and how many the block's threads
+// before it keep.
+@group(0) @binding(6) var<storage, read_write> threads: array<vec2u>;
+// Per block of 1024 triangles: its kept count, then (after `places`) the kept count of the blocks
+// before it; one more entry after the last block: the total.
+@group(0) @binding(7) var<storage, read_write> blocks: array<u32>;
+// x of the first entry: how many runs this frame draws; then per run its triangles [x, y).
+@group(0) @binding(8) var<storage, read> runs: array<vec2u>;
+// Per run: DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
+// instance).
+@group(0) @binding(9) var<storage, read_write> args: array<u32>;
 
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -74,17 +94,11 @@ fn misses_centres(lo: f32, hi: f32, n: u32) -> bool {
     return first > last;
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    f = frame_in;
-    let t = id.x + id.y * groups.x * 64u;
-    if (t >= arrayLength(&lists) / 3u) { return; }
-    let i0 = indices[3u * t];
-    let i1 = indices[3u * t + 1u];
-    let i2 = indices[3u * t + 2u];
-    let p0 = position(i0);
-    let p1 = position(i1);
-    let p2 = position(i2);
+// Whether triangle t would draw nothing.
+fn empty(t: u32) -> bool {
+    let p0 = position(indices[3u * t]);
+    let p1 = position(indices[3u * t + 1u]);
+    let p2 = position(indices[3u * t + 2u]);
     let a = clip_of(p0);
     let b = clip_of(p1);
     let c = clip_of(p2);
@@ -97,7 +111,107 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
         let hi = max(pa, max(pb, pc));
         empty = misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y);
     }
-    lists[3u * t] = i0;
-    lists[3u * t + 1u] = select(i1, i0, empty);
-    lists[3u * t + 2u] = select(i2, i0, empty);
+    return empty;
+}
+
+const PER_THREAD: u32 = 16u;
+const BLOCK: u32 = 1024u; // 64 threads x PER_THREAD
+
+fn triangle_count() -> u32 {
+    return arrayLength(&lists) / 3u;
+}
+
+var<workgroup> partial: array<u32, 256>;
+var<workgroup> block_count: u32;
+
+// Inclusive scan of `partial[0..width]` over the workgroup's first `width` threads (Hillis-Steele),
+// as cull.wgsl's. `width` must be the same for every thread: the loop holds barriers.
+fn scan_partial(lid: u32, width: u32) {
+    for (var step = 1u; step < width; step <<= 1u) {
+        workgroupBarrier();
+        var add = 0u;
+        if (lid >= step) { add = partial[lid - step]; }
+        workgroupBarrier();
+        partial[lid] += add;
+    }
+    workgroupBarrier();
+}
+
+// The block's thread `lid`: which of its 16 triangles are kept, and the block's prefix of them.
+@compute @workgroup_size(64)
+fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) lid: u32) {
+    f = frame_in;
+    let block = wg.x + wg.y * groups.x;
+    let n = triangle_count();
+    // Workgroups past the last block (the dispatch's second row) have nothing to do; the test is
+    // the same for the whole workgroup, so the barriers below stay uniform.
+    if (block * BLOCK >= n) { return; }
+    let thread = block * 64u + lid;
+    let first = thread * PER_THREAD;
+    var mask = 0u;
+    for (var i = 0u; i < PER_THREAD; i++) {
+        if (first + i < n && !empty(first + i)) { mask |= 1u << i; }
+    }
+    let count = countOneBits(mask);
+    partial[lid] = count;
+    scan_partial(lid, 64u);
+    threads[thread] = vec2u(mask, partial[lid] - count);
+    if (lid == 63u) { blocks[block] = partial[63]; }
+}
+
+// Kept triangles before triangle t (t up to the count; `blocks` already summed).
+fn place(t: u32) -> u32 {
+    let n = triangle_count();
+    if (t >= n) { return blocks[(n + BLOCK - 1u) / BLOCK]; }
+    let th = threads[t / PER_THREAD];
+    return blocks[t / BLOCK] + th.y + countOneBits(th.x & ((1u << (t % PER_THREAD)) - 1u));
+}
+
+// The blocks' exclusive prefix (and the total after them), then each run's draw arguments.
+@compute @workgroup_size(256)
+fn places(@builtin(local_invocation_index) lid: u32) {
+    let count = (triangle_count() + BLOCK - 1u) / BLOCK;
+    var carry = 0u;
+    for (var start = 0u; start < count; start += 256u) {
+        var v = 0u;
+        if (start + lid < count) { v = blocks[start + lid]; }
+        partial[lid] = v;
+        scan_partial(lid, 256u);
+        if (start + lid < count) { blocks[start + lid] = carry + partial[lid] - v; }
+        carry += partial[255];
+        workgroupBarrier();
+    }
+    if (lid == 0u) { blocks[count] = carry; }
+    storageBarrier();
+    workgroupBarrier();
+    let run_count = runs[0].x;
+    for (var r = lid; r < run_count; r += 256u) {
+        let range = runs[r + 1u];
+        let a = place(range.x);
+        let b = place(range.y);
+        args[5u * r] = 3u * (b - a);
+        args[5u * r + 1u] = 1u;
+        args[5u * r + 2u] = 3u * a;
+        args[5u * r + 3u] = 0u;
+        args[5u * r + 4u] = 0u;
+    }
+}
+
+// The kept triangles of a `mark` thread, copied to their places.
+@compute @workgroup_size(64)
+fn compact(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) lid: u32) {
+    let block = wg.x + wg.y * groups.x;
+    if (block * BLOCK >= triangle_count()) { return; }
+    let thread = block * 64u + lid;
+    let th = threads[thread];
+    var at = blocks[block] + th.y;
+    var mask = th.x;
+    while (mask != 0u) {
+        let t = thread * PER_THREAD + firstTrailingBit(mask);
+        mask &= mask - 1u;
+        lists[3u * at] = indices[3u * t];
+        lists[3u * at + 1u] = indices[3u * t + 1u];
+        lists[3u * at + 2u] = indices[3u * t + 2u];
+        at++;
+    }
 }

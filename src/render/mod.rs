@@ -346,9 +346,10 @@ pub struct Renderer {
     /// their faces toward the eye or the light (on by default; off only to compare,
     /// `tests/solids.rs`).
     pub back_face_culling: bool,
-    /// Surface draws the triangles that would draw nothing (they cover no pixel centre, or they
-    /// are solids' faces turned away from the eye) as empty ones, skipping their vertex work (on by
-    /// default; the targets are the same either way, off only to compare, `tests/surface_cull.rs`).
+    /// Surface leaves out the triangles that would draw nothing (they cover no pixel centre, or
+    /// they are solids' faces turned away from the eye) and draws the others in their order,
+    /// skipping the left-out ones' vertex work and primitive assembly (on by default; the targets
+    /// are the same either way, off only to compare, `tests/surface_cull.rs`).
     pub surface_culling: bool,
     /// Scan the grid's columns (a plane's four words of bins each) with a workgroup per plane
     /// instead of one thread per column (`scan_columns.wgsl`; grids whose rays start on four
@@ -900,7 +901,7 @@ impl Renderer {
             };
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
             let eye = EyeDrawing { runs: &eye_runs, toward_ccw: eye_ccw, cull: self.surface_culling };
-            p.surface.record(&mut f.enc, v, g, targets, eye);
+            p.surface.record(queue, &mut f.enc, v, g, targets, eye);
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
             if draws_map && !map_reused {
@@ -1073,12 +1074,15 @@ impl Renderer {
     }
 
     /// The indices Surface drew in the last frame with [`Renderer::surface_culling`]: the scene's,
-    /// with each triangle that would draw nothing (it covers no pixel centre, or it is a solid's
-    /// face the pipeline culls) emptied to `(i0, i0, i0)` (`None` when no list was made: no scene,
-    /// or one too large for a storage binding), for tests.
+    /// in their order, without the triangles that would draw nothing (they cover no pixel centre,
+    /// or they are a solid's faces the pipeline culls) (`None` when no list was made: no scene, or
+    /// one too large for a storage binding), for tests.
     pub fn read_eye_list(&self) -> Result<Option<Vec<u32>>, GpuError> {
-        let Some(list) = self.passes.surface.eye_list() else { return Ok(None) };
-        Ok(Some(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(list)?)))
+        let Some((list, blocks)) = self.passes.surface.eye_list() else { return Ok(None) };
+        let blocks: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(blocks)?);
+        let mut list: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(list)?);
+        list.truncate(3 * blocks.last().copied().unwrap_or(0) as usize);
+        Ok(Some(list))
     }
 
     /// The point light's scatter table as the last frame left it: `TABLE_ROWS x (TABLE_COLS + 1)`
@@ -1195,6 +1199,7 @@ mod layout_tests {
         assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_MATRIX_FLOATS"), ShadowPyramid::MATRIX_FLOATS);
+        assert_eq!(wgsl_u32("surface_cull.wgsl", "BLOCK"), Surface::CULL_BLOCK);
     }
 
     #[test]

@@ -9,12 +9,13 @@
 //! The solids the eye lies outside of draw only their faces toward it (`crate::scene::solid`):
 //! the scene is drawn as runs of consecutive meshes that cull the same faces.
 //!
-//! Before drawing, a compute pass (`shaders/surface_cull.wgsl`) empties the triangles whose
+//! Before drawing, a compute pass (`shaders/surface_cull.wgsl`) leaves out the triangles whose
 //! bounding box in pixels holds no pixel centre, and the solids' faces turned away from the eye
 //! (which the pipeline's cull mode would drop after their vertex work): they would draw nothing.
-//! The draw list keeps every triangle in its place, so the targets are the same, bit for bit; on
-//! a million-triangle scene most triangles are such, and llvmpipe's vertex work, which runs on
-//! one thread, shrinks with them.
+//! The draw list keeps the other triangles in their order (a prefix sum places them), and each
+//! run draws its part of it through indirect arguments the pass writes, so the targets are the
+//! same, bit for bit; on a million-triangle scene most triangles are such, and llvmpipe's vertex
+//! work and primitive assembly, which run on one thread, shrink with them.
 
 use super::scene_gpu::{Facing, SceneGpu};
 use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, Kind};
@@ -35,6 +36,10 @@ bindings! {
         lists: Kind::StorageRw,
         triangle_meshes: Kind::Storage,
         sides: Kind::Storage,
+        threads: Kind::StorageRw,
+        blocks: Kind::StorageRw,
+        runs: Kind::Storage,
+        args: Kind::StorageRw,
     }
 }
 
@@ -53,10 +58,18 @@ struct EyeList {
     /// The scene index buffer and the frame parameters it was made from (remade when they change).
     source: wgpu::Buffer,
     frame: wgpu::Buffer,
-    /// The scene's indices with the triangles that would draw nothing emptied.
+    /// The scene's indices without the triangles that would draw nothing, in their order.
     lists: wgpu::Buffer,
+    /// Per block of [`Surface::CULL_BLOCK`] triangles, the kept ones before it, then the total.
+    blocks: wgpu::Buffer,
+    /// This frame's runs: their count, then each one's triangles (written per frame).
+    runs: wgpu::Buffer,
+    /// Each run's `DrawIndexedIndirect` arguments, written by the pass.
+    args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     triangles: u32,
+    /// Meshes: no frame draws more runs than that.
+    meshes: u32,
 }
 
 /// The pass's render targets, `width x height`.
@@ -74,7 +87,8 @@ pub struct Surface {
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
     cull_layout: wgpu::BindGroupLayout,
-    cull_pipeline: wgpu::ComputePipeline,
+    /// surface_cull.wgsl's `mark`, `places` and `compact`.
+    cull_pipelines: [wgpu::ComputePipeline; 3],
     /// `None` until bound, or when the list would not fit a storage binding (then every triangle
     /// is drawn as it is).
     eye_list: Option<EyeList>,
@@ -88,6 +102,10 @@ impl Surface {
     /// view ray and its normal (0 when lit from the front).
     pub const DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
     pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+    /// Triangles per workgroup of the culling's `mark` and `compact` (64 threads of 16).
+    pub const CULL_BLOCK: u32 = 1024;
+    /// Bytes of one run's `DrawIndexedIndirect` arguments.
+    const ARGS_BYTES: u64 = 20;
 
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Surface, GpuError> {
         let module = lib.module(device, "surface.wgsl")?;
@@ -99,7 +117,9 @@ impl Surface {
         });
         let cull_module = lib.module(device, "surface_cull.wgsl")?;
         let cull_layout = SurfaceCullBindings::layout(device, "Surface::cull_layout", wgpu::ShaderStages::COMPUTE);
-        let cull_pipeline = compute_pipeline(device, "Surface::cull_pipeline", &cull_module, "main", &cull_layout);
+        let cull_pipelines = ["mark", "places", "compact"].map(|entry| {
+            compute_pipeline(device, &format!("Surface::cull_pipeline_{entry}"), &cull_module, entry, &cull_layout)
+        });
         Ok(Surface {
             module,
             pipeline_layout: pl,
@@ -107,7 +127,7 @@ impl Surface {
             layout,
             bind_group: None,
             cull_layout,
-            cull_pipeline,
+            cull_pipelines,
             eye_list: None,
         })
     }
@@ -126,13 +146,24 @@ impl Surface {
         if geometry.index_count == 0 || bytes > limit || geometry.vertices.size() > limit {
             return;
         }
-        let lists = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Surface::eye_list"),
-            size: bytes,
-            // COPY_SRC: Renderer::read_eye_list, for tests.
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let triangles = geometry.index_count / 3;
+        let meshes = geometry.meshes.len() as u32;
+        // COPY_SRC: Renderer::read_eye_list, for tests.
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: usage | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let lists = buffer("Surface::eye_list", bytes, wgpu::BufferUsages::INDEX);
+        // Per `mark` thread (64 a block, the last block's too) two words; per block one, and the total.
+        let block_count = triangles.div_ceil(Self::CULL_BLOCK) as u64;
+        let threads = buffer("Surface::cull_threads", block_count * 64 * 8, wgpu::BufferUsages::empty());
+        let blocks = buffer("Surface::cull_blocks", (block_count + 1) * 4, wgpu::BufferUsages::empty());
+        let runs = buffer("Surface::cull_runs", (meshes as u64 + 1) * 8, wgpu::BufferUsages::COPY_DST);
+        let args = buffer("Surface::cull_args", meshes.max(1) as u64 * Self::ARGS_BYTES, wgpu::BufferUsages::INDIRECT);
         let bind_group = SurfaceCullBindings {
             frame_in: frame.as_entire_binding(),
             vertices: geometry.vertices.as_entire_binding(),
@@ -140,14 +171,22 @@ impl Surface {
             lists: lists.as_entire_binding(),
             triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
             sides: geometry.eye_sides.as_entire_binding(),
+            threads: threads.as_entire_binding(),
+            blocks: blocks.as_entire_binding(),
+            runs: runs.as_entire_binding(),
+            args: args.as_entire_binding(),
         }
         .bind(device, "Surface::cull_bind_group", &self.cull_layout);
         self.eye_list = Some(EyeList {
             source: geometry.indices.clone(),
             frame: frame.clone(),
             lists,
+            blocks,
+            runs,
+            args,
             bind_group,
-            triangles: geometry.index_count / 3,
+            triangles,
+            meshes,
         });
     }
 
@@ -189,6 +228,7 @@ impl Surface {
 
     pub fn record(
         &self,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
         geometry: &SceneGpu,
@@ -198,17 +238,26 @@ impl Surface {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let EyeDrawing { runs, toward_ccw, cull } = drawing;
-        let list = self.eye_list.as_ref().filter(|_| cull);
+        let list = self.eye_list.as_ref().filter(|l| cull && runs.len() <= l.meshes as usize);
         if let Some(list) = list {
+            // The runs' triangles, for their draw arguments (`places`).
+            let mut ranges = vec![[runs.len() as u32, 0]];
+            ranges.extend(runs.iter().map(|(r, _)| [r.start / 3, r.end / 3]));
+            queue.write_buffer(&list.runs, 0, bytemuck::cast_slice(&ranges));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("Surface::cull_pass"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.cull_pipeline);
             pass.set_bind_group(0, &list.bind_group, &[]);
-            // 64 triangles a workgroup, spread over y past the 65 535 limit on x.
-            let groups = list.triangles.div_ceil(64).max(1);
+            // One workgroup per block of triangles, spread over y past the 65 535 limit on x.
+            let groups = list.triangles.div_ceil(Self::CULL_BLOCK).max(1);
             let x = groups.min(65_535);
+            let [mark, places, compact] = &self.cull_pipelines;
+            pass.set_pipeline(mark);
+            pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+            pass.set_pipeline(places);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(compact);
             pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
         }
         let SurfaceTargets { material, distance, depth } = targets;
@@ -240,16 +289,19 @@ impl Surface {
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         let indices = list.map_or(&geometry.indices, |l| &l.lists);
         pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-        for (range, facing) in runs {
+        for (i, (range, facing)) in runs.iter().enumerate() {
             pass.set_pipeline(&pipelines[cull_mode(*facing, toward_ccw).0]);
-            pass.draw_indexed(range.clone(), 0, 0..1);
+            match list {
+                Some(l) => pass.draw_indexed_indirect(&l.args, i as u64 * Self::ARGS_BYTES),
+                None => pass.draw_indexed(range.clone(), 0, 0..1),
+            }
         }
     }
 
-    /// The indices the last culled frame drew ([`Surface::record`] with `cull`; `None` without a
-    /// list), for tests.
-    pub fn eye_list(&self) -> Option<&wgpu::Buffer> {
-        self.eye_list.as_ref().map(|l| &l.lists)
+    /// The draw list of the last culled frame ([`Surface::record`] with `cull`; `None` without a
+    /// list) and the buffer whose last word holds its triangle count, for tests.
+    pub fn eye_list(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
+        self.eye_list.as_ref().map(|l| (&l.lists, &l.blocks))
     }
 
     /// An empty pass over the surface targets (loaded and stored, nothing drawn), recorded after
