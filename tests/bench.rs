@@ -88,11 +88,16 @@ fn quick_bench_writes_every_file_with_rows_for_every_method() {
     assert!(report.contains("logical CPUs"), "the report describes the machine");
     assert!(report.contains("error_vs_time.png"));
     assert!(report.contains("| cartesian |") && report.contains("| raymarch |") && report.contains("| vsv |"));
+    // Target 3's figure: each scaling point's time at the most triangles over a tenth of them.
+    for p in bench::scaling_points_of(&res.triangle_rows) {
+        let g = bench::triangle_growth(&res.triangle_rows, &p).expect("two triangle counts");
+        assert!(report.contains(&g.describe()), "the report lacks {}", g.describe());
+    }
 }
 
 /// With `rounds = 3` every point of the error sweep is timed three times, interleaved: its time is
 /// the median of three times as many frames, its image and error those of the first round, and
-/// the report says how it was timed.
+/// the report says how it was timed. The triangle sweep takes the same rounds, each room in turn.
 #[test]
 fn rounds_pool_every_points_frames() {
     let Some(mut r) = renderer() else { return };
@@ -102,7 +107,13 @@ fn rounds_pool_every_points_frames() {
     let scene = axis_aligned_scene();
     let once = bench::run(&mut r, &scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     opts.rounds = 3;
+    opts.scaling = true;
     let res = bench::run(&mut r, &scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!res.triangle_rows.is_empty());
+    for row in &res.triangle_rows {
+        // Three rounds of min(frames, 3) = 2 frames each.
+        assert_eq!((row.timing.frames, row.timing.round_ms.len()), (6, 3), "{} triangles", row.triangles);
+    }
     assert_eq!(res.rows.len(), once.rows.len());
     for (a, b) in once.rows.iter().zip(&res.rows) {
         assert_eq!(a.point, b.point);

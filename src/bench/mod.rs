@@ -633,6 +633,68 @@ fn ratios_by_round(baseline: &Row, row: &Row) -> Vec<f64> {
     b.iter().zip(r).map(|(b, r)| b / r).collect()
 }
 
+/// How a scaling point's frame grows with the scene: its time at the sweep's most triangles over
+/// its time at the count nearest a tenth of that (issue 11's target 3: a million against 100 000).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Growth {
+    /// (triangles, ms) at the smaller and the larger count.
+    pub small: (usize, f64),
+    pub large: (usize, f64),
+    /// `large / small` of the medians over all rounds.
+    pub ratio: f64,
+    /// The same ratio of each round's medians alone (empty with fewer than two rounds).
+    pub by_round: Vec<f64>,
+}
+
+impl Growth {
+    /// `107532 -> 1032204 triangles: 121 -> 259 ms, 2.14x (1.98x to 2.20x by round)`.
+    pub fn describe(&self) -> String {
+        let (sn, sm) = self.small;
+        let (ln, lm) = self.large;
+        let main = format!("{sn} -> {ln} triangles: {sm:.0} -> {lm:.0} ms, {:.2}x", self.ratio);
+        let lo = self.by_round.iter().copied().reduce(f64::min);
+        let hi = self.by_round.iter().copied().reduce(f64::max);
+        match lo.zip(hi) {
+            Some((lo, hi)) => format!("{main} ({lo:.2}x to {hi:.2}x by round)"),
+            None => main,
+        }
+    }
+}
+
+/// The points of scaling `rows`, each once, in their order.
+pub fn scaling_points_of(rows: &[ScalingRow]) -> Vec<Point> {
+    let mut points: Vec<Point> = Vec::new();
+    for row in rows {
+        if !points.contains(&row.point) {
+            points.push(row.point);
+        }
+    }
+    points
+}
+
+/// [`Growth`] of `point` over the triangle sweep's `rows`; `None` with fewer than two counts.
+pub fn triangle_growth(rows: &[ScalingRow], point: &Point) -> Option<Growth> {
+    let mine: Vec<&ScalingRow> = rows.iter().filter(|r| r.point == *point).collect();
+    let large = *mine.iter().max_by_key(|r| r.triangles)?;
+    let tenth = large.triangles as f64 / 10.0;
+    let small = *mine
+        .iter()
+        .filter(|r| r.triangles < large.triangles)
+        .min_by(|a, b| (a.triangles as f64 - tenth).abs().total_cmp(&(b.triangles as f64 - tenth).abs()))?;
+    let (s, l) = (&small.timing, &large.timing);
+    let by_round = if s.round_ms.len() >= 2 && s.round_ms.len() == l.round_ms.len() {
+        s.round_ms.iter().zip(&l.round_ms).map(|(s, l)| l / s).collect()
+    } else {
+        Vec::new()
+    };
+    Some(Growth {
+        small: (small.triangles, s.total_ms),
+        large: (large.triangles, l.total_ms),
+        ratio: l.total_ms / s.total_ms,
+        by_round,
+    })
+}
+
 /// Relative difference of two errors below which [`BaselineRatio::most_accurate`] takes them as
 /// the same.
 pub const SAME_ERROR: f64 = 0.01;
@@ -742,7 +804,9 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     let scaling = scaling_points(opts.quick);
     let tri_counts = if opts.scaling { triangle_sweep(opts.quick) } else { Vec::new() };
     let sizes = if opts.scaling { resolution_sweep(opts.quick) } else { Vec::new() };
-    let total = points.len() + scaling.len() * (tri_counts.len() + sizes.len());
+    // The triangle sweep runs in rounds too (it is what issue 11's target 3 reads), the image sizes
+    // once.
+    let total = points.len() + scaling.len() * (tri_counts.len() * opts.rounds.max(1) + sizes.len());
     let bar = style(total as u64, opts.progress);
     bar.set_prefix("bench");
 
@@ -851,6 +915,47 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         bar.inc(1);
     }
 
+    // Every round times every room once, in the same order, so that a slow phase of the machine
+    // falls on all of them alike; each row pools its rounds' frames (`Frames::pool`).
+    let mut rooms: Vec<Scene> = tri_counts.iter().map(|&n| procedural_scene(n)).collect();
+    let mut triangle_frames: Vec<(Point, usize, Frames)> = Vec::new();
+    for round in 1..=opts.rounds.max(1) {
+        for room in rooms.iter_mut() {
+            let tri = room.triangle_count();
+            for p in &scaling {
+                bar.set_message(format!(
+                    "round {round}: {} {} at {w}x{h}, {tri} triangles",
+                    p.method_name(),
+                    p.setting()
+                ));
+                // Median of 3 after one warm-up: these points only time, and the largest take long.
+                match time_frames(renderer, room, w, h, p, 1, opts.frames.min(3)) {
+                    Ok((frames, _)) => match triangle_frames.iter_mut().find(|(q, n, _)| q == p && *n == tri) {
+                        Some((_, _, pooled)) => pooled.pool(frames),
+                        None => triangle_frames.push((*p, tri, frames)),
+                    },
+                    Err(e) => notes.push(format!(
+                        "{} {} at {w}x{h} with {tri} triangles, round {round}: skipped, it failed: {e}",
+                        p.method_name(),
+                        p.setting(),
+                    )),
+                }
+                bar.inc(1);
+            }
+        }
+    }
+    drop(rooms);
+    let triangle_rows: Vec<ScalingRow> = triangle_frames
+        .into_iter()
+        .map(|(point, triangles, frames)| ScalingRow {
+            point,
+            triangles,
+            width: w,
+            height: h,
+            timing: frames.timing(timestamps),
+        })
+        .collect();
+
     let mut scale = |scene: &mut Scene,
                      tri: usize,
                      size: (u32, u32),
@@ -875,12 +980,6 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
             bar.inc(1);
         }
     };
-    let mut triangle_rows = Vec::new();
-    for &n in &tri_counts {
-        let mut room = procedural_scene(n);
-        let tri = room.triangle_count();
-        scale(&mut room, tri, (w, h), &mut triangle_rows, &mut notes);
-    }
     let mut resolution_rows = Vec::new();
     for &s in &sizes {
         let tri = work.triangle_count();
@@ -1013,6 +1112,42 @@ mod tests {
             scatter: stats,
             hdr: stats,
         }
+    }
+
+    #[test]
+    fn triangle_growth_divides_the_most_triangles_by_the_count_nearest_a_tenth() {
+        let vsv = Point::vsv(PAPER_GRID, 2048);
+        let march = Point::march(256, 2048, false);
+        let scaling = |point, triangles, rounds: &[f64]| ScalingRow {
+            point,
+            triangles,
+            width: 8,
+            height: 8,
+            timing: Timing {
+                total_ms: median(rounds.to_vec()),
+                volume_ms: f64::NAN,
+                passes: Vec::new(),
+                frames: rounds.len(),
+                round_ms: rounds.to_vec(),
+            },
+        };
+        let rows = [
+            scaling(vsv, 10_000, &[80.0, 90.0, 85.0]),
+            scaling(vsv, 100_000, &[100.0, 130.0, 120.0]),
+            scaling(vsv, 300_000, &[150.0, 150.0, 150.0]),
+            scaling(vsv, 1_000_000, &[200.0, 240.0, 300.0]),
+            scaling(march, 10_000, &[50.0]),
+        ];
+        assert_eq!(scaling_points_of(&rows), [vsv, march]);
+        let g = triangle_growth(&rows, &vsv).unwrap();
+        // Against 100 000 (nearest 1 000 000 / 10), not 300 000 or 10 000.
+        assert_eq!((g.small, g.large), ((100_000, 120.0), (1_000_000, 240.0)));
+        assert_eq!(g.ratio, 2.0);
+        // A slow phase in the second round moves both counts: each round's own ratio.
+        assert_eq!(g.by_round, [2.0, 240.0 / 130.0, 2.5]);
+        assert!(g.describe().ends_with("2.00x (1.85x to 2.50x by round)"), "{}", g.describe());
+        // One count is no growth.
+        assert_eq!(triangle_growth(&rows, &march), None);
     }
 
     #[test]

@@ -509,6 +509,15 @@ pub fn markdown(r: &BenchResults) -> String {
             continue;
         }
         let _ = writeln!(s, "\n## {title}\n\n![{title}]({png})\n\n{what}.\n");
+        if std::ptr::eq(rows, &r.triangle_rows) {
+            // Issue 11's target 3 reads this: the time at the most triangles over the time at a tenth.
+            for p in &super::scaling_points_of(rows) {
+                if let Some(g) = super::triangle_growth(rows, p) {
+                    let _ = writeln!(s, "- {} {}: {}", p.method_name(), p.setting(), g.describe());
+                }
+            }
+            let _ = writeln!(s, "\nMedians over {} rounds, each timing every room in turn.\n", r.rounds);
+        }
         let cols = pass_columns(rows.iter().map(|x| &x.timing));
         let _ = write!(s, "| method | setting | triangles | image | total ms |");
         for c in &cols {

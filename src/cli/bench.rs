@@ -122,6 +122,11 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             row.scatter.rel_rmse * 100.0
         );
     }
+    for p in &bench::scaling_points_of(&r.triangle_rows) {
+        if let Some(g) = bench::triangle_growth(&r.triangle_rows, p) {
+            println!("time against triangles, {} {}: {}", p.method_name(), p.setting(), g.describe());
+        }
+    }
     for e in &r.edit_rows {
         println!(
             "a medium edit, {} {}: {:.1} ms against {:.1} ms for a whole frame (wall clock)",
