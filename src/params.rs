@@ -638,9 +638,17 @@ impl Measure {
         unit: "rounds",
         min: 1.0,
         max: 100.0,
-        doc: "Times the error sweep is timed, interleaved: each round times every point once (after \
-              its warm-up), so a slow phase of a shared machine falls on all points alike; a point's \
-              time is the median of its frames from all rounds.",
+        doc: "Times the error sweep and the triangle sweep are timed, interleaved: each round times \
+              every point once (after its warm-up), so a slow phase of a shared machine falls on all \
+              points alike; a point's time is the median of its frames from all rounds.",
+    };
+    pub const ROOM: Spec = Spec {
+        name: "room",
+        unit: "triangles",
+        min: 2000.0,
+        max: 10_000_000.0,
+        doc: "The bench's procedural room (64 spheres under a point light, the triangle sweep's scene) \
+              tessellated to at least this many triangles.",
     };
 }
 

@@ -347,6 +347,14 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     // least A's mean, so the relative RMSE is at least 50% (equal only for a flat image).
     let err = j["scatter"]["error"]["rel_rmse"].as_f64().expect("an error against A");
     assert!(err > 0.4999 && err < 5.0, "{j}");
+    // The bench's procedural room instead of a scene file (its smallest), and a count out of range.
+    let args = ["ab", "--room", "2000", "--b", same.to_str().unwrap(), "--size", "16x16", "--rounds", "1"];
+    let o = epivox(&[&args[..], &["--frames", "1", "--warmup", "0", "--json"]].concat(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is one JSON object");
+    assert!(j["scene"].as_str().is_some_and(|s| s.starts_with("procedural room")), "{j}");
+    let err = fails(&["ab", "--room", "5", "--b", same.to_str().unwrap()], &[]);
+    assert!(err.contains("room") && err.contains("2000"), "{err}");
     let missing = same.join("no-such-folder");
     let err = fails(&["ab", "--b", missing.to_str().unwrap(), "--size", "16x16"], &[]);
     assert!(err.contains("no-such-folder") && err.contains("not a folder"), "{err}");

@@ -13,6 +13,10 @@ pub struct AbArgs {
     /// A mesh, a folder of meshes, a Mitsuba scene or a .toml scene file (the built-in scene when
     /// omitted).
     pub scene: Option<PathBuf>,
+    #[arg(long, value_name = "TRIANGLES", conflicts_with = "scene",
+          value_parser = |s: &str| super::parse_count::<usize>(&Measure::ROOM, s),
+          help = super::spec_help("Time the bench's procedural room instead of SCENE, at the paper's grid unless --grid", &Measure::ROOM))]
+    pub room: Option<usize>,
     /// The shader folder under test (a copy of shaders/ with an edit).
     #[arg(long, value_name = "DIR")]
     pub b: PathBuf,
@@ -58,9 +62,15 @@ pub enum AbMethod {
 }
 
 pub fn ab(args: AbArgs) -> Result<()> {
-    let mut scene = match &args.scene {
-        Some(p) => load_scene(p)?,
-        None => builtin_scene(),
+    let mut scene = match (&args.scene, args.room) {
+        (Some(p), _) => load_scene(p)?,
+        (None, Some(n)) => {
+            // As the bench's triangle sweep times it.
+            let mut room = epivox::bench::procedural_scene(n);
+            room.grid = epivox::bench::PAPER_GRID;
+            room
+        }
+        (None, None) => builtin_scene(),
     };
     if let Some(g) = args.grid {
         scene.grid = g;
@@ -112,7 +122,7 @@ pub fn ab(args: AbArgs) -> Result<()> {
     }
     let r = ab::run(&mut a, &mut b, &scene, &opts).context("timing A against B")?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&to_json(&r, &a_dir, &b_dir, &ctx.adapter_name()))?);
+        println!("{}", serde_json::to_string_pretty(&to_json(&r, &scene.name, &a_dir, &b_dir, &ctx.adapter_name()))?);
     } else {
         print_table(&r, &a_dir, &b_dir);
     }
@@ -174,7 +184,7 @@ fn describe(images: &AbImages) -> String {
     }
 }
 
-fn to_json(r: &AbResult, a_dir: &str, b_dir: &str, adapter: &str) -> serde_json::Value {
+fn to_json(r: &AbResult, scene: &str, a_dir: &str, b_dir: &str, adapter: &str) -> serde_json::Value {
     let side = |s: &ab::AbSide, dir: &str| {
         let passes: serde_json::Map<String, serde_json::Value> =
             s.timing.passes.iter().map(|(p, ms)| (p.to_string(), serde_json::json!(ms))).collect();
@@ -192,6 +202,7 @@ fn to_json(r: &AbResult, a_dir: &str, b_dir: &str, adapter: &str) -> serde_json:
     };
     serde_json::json!({
         "adapter": adapter,
+        "scene": scene,
         "a": side(&r.a, a_dir),
         "b": side(&r.b, b_dir),
         "scatter": images(&r.scatter),
