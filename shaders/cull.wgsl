@@ -25,6 +25,7 @@
 #import common
 #import triangle_bounds
 #import hidden
+#import workgroup_scan
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> tris: array<vec4f>;
@@ -166,21 +167,8 @@ fn cull_finish() {
 
 // ---- exclusive prefix sum of the items -------------------------------------------------------
 
-var<workgroup> partial: array<u32, 256>;
+// (scan_partial over `partial`: workgroup_scan.wgsl.)
 var<workgroup> block_count: u32;
-
-// Inclusive scan of `partial[0..width]` over the workgroup's first `width` threads (Hillis-Steele;
-// 8 steps for 256). `width` must be the same for every thread: the loop holds barriers.
-fn scan_partial(lid: u32, width: u32) {
-    for (var step = 1u; step < width; step <<= 1u) {
-        workgroupBarrier();
-        var add = 0u;
-        if (lid >= step) { add = partial[lid - step]; }
-        workgroupBarrier();
-        partial[lid] += add;
-    }
-    workgroupBarrier();
-}
 
 // offsets_local runs 64 threads of 16 consecutive counts each: on a CPU adapter every barrier
 // switches between all of a workgroup's invocations, and 256 threads x 4 spent 40 of the pass's

@@ -33,6 +33,7 @@
 // per emptied triangle: 21 ms of Surface's 63 at a million triangles.
 
 #import common
+#import workgroup_scan
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 // The scene's vertex buffer: [x, y, z, r, g, b] per vertex.
@@ -121,21 +122,6 @@ fn triangle_count() -> u32 {
     return arrayLength(&lists) / 3u;
 }
 
-var<workgroup> partial: array<u32, 256>;
-var<workgroup> block_count: u32;
-
-// Inclusive scan of `partial[0..width]` over the workgroup's first `width` threads (Hillis-Steele),
-// as cull.wgsl's. `width` must be the same for every thread: the loop holds barriers.
-fn scan_partial(lid: u32, width: u32) {
-    for (var step = 1u; step < width; step <<= 1u) {
-        workgroupBarrier();
-        var add = 0u;
-        if (lid >= step) { add = partial[lid - step]; }
-        workgroupBarrier();
-        partial[lid] += add;
-    }
-    workgroupBarrier();
-}
 
 // The block's thread `lid`: which of its 16 triangles are kept, and the block's prefix of them.
 @compute @workgroup_size(64)

@@ -29,11 +29,13 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("triangle_bounds.wgsl", include_str!("../../shaders/triangle_bounds.wgsl")),
     ("shadow_lookup.wgsl", include_str!("../../shaders/shadow_lookup.wgsl")),
     ("hidden.wgsl", include_str!("../../shaders/hidden.wgsl")),
+    ("workgroup_scan.wgsl", include_str!("../../shaders/workgroup_scan.wgsl")),
     ("raymarch.wgsl", include_str!("../../shaders/raymarch.wgsl")),
 ];
 
 /// The files that only declare things for others to `#import` (validated through their users).
-pub const IMPORTED_ONLY: &[&str] = &["common.wgsl", "triangle_bounds.wgsl", "shadow_lookup.wgsl", "hidden.wgsl"];
+pub const IMPORTED_ONLY: &[&str] =
+    &["common.wgsl", "triangle_bounds.wgsl", "shadow_lookup.wgsl", "hidden.wgsl", "workgroup_scan.wgsl"];
 
 /// A shader that failed to load, compose or validate.
 #[derive(Debug, Clone, thiserror::Error)]
