@@ -215,11 +215,9 @@ fn offsets_blocks(@builtin(local_invocation_index) lid: u32) {
     for (var start = 0u; start < n; start += 256u) {
         var v = 0u;
         if (start + lid < n) { v = blocks[start + lid]; }
-        partial[lid] = v;
-        scan_partial(lid, 256u);
-        if (start + lid < n) { blocks[start + lid] = sat_add(carry, partial[lid] - v); }
-        carry = sat_add(carry, partial[255]);
-        workgroupBarrier();
+        let chunk = scan_chunk(lid, v);
+        if (start + lid < n) { blocks[start + lid] = sat_add(carry, chunk.x); }
+        carry = sat_add(carry, chunk.y);
     }
     if (lid == 0u) {
         // A saturated total cannot be told from a true one: cap the list below it and count what is cut.

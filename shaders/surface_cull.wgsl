@@ -29,8 +29,9 @@
 // steps: `mark` (a thread per 16 triangles, a workgroup per block of 1024: the kept triangles as a
 // bit mask per thread and their prefix within the block), `places` (one workgroup: the blocks'
 // prefix, and the runs' indirect draw arguments) and `compact` (the copies). Emptying them in place
-// as (i0, i0, i0) instead (sessions 20-27) left llvmpipe's single-threaded primitive assembly ~26 ns
-// per emptied triangle: 21 ms of Surface's 63 at a million triangles.
+// as (i0, i0, i0) instead (sessions 21-27) still sent them through llvmpipe's single-threaded
+// index fetch and primitive assembly: leaving them out took a million-triangle room's Surface from
+// 61-62 to 51-54 ms (session 28).
 
 #import common
 #import workgroup_scan
@@ -122,7 +123,6 @@ fn triangle_count() -> u32 {
     return arrayLength(&lists) / 3u;
 }
 
-
 // The block's thread `lid`: which of its 16 triangles are kept, and the block's prefix of them.
 @compute @workgroup_size(64)
 fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) lid: u32) {
@@ -161,11 +161,9 @@ fn places(@builtin(local_invocation_index) lid: u32) {
     for (var start = 0u; start < count; start += 256u) {
         var v = 0u;
         if (start + lid < count) { v = blocks[start + lid]; }
-        partial[lid] = v;
-        scan_partial(lid, 256u);
-        if (start + lid < count) { blocks[start + lid] = carry + partial[lid] - v; }
-        carry += partial[255];
-        workgroupBarrier();
+        let chunk = scan_chunk(lid, v);
+        if (start + lid < count) { blocks[start + lid] = carry + chunk.x; }
+        carry += chunk.y;
     }
     if (lid == 0u) { blocks[count] = carry; }
     storageBarrier();

@@ -20,3 +20,16 @@ fn scan_partial(lid: u32, width: u32) {
     }
     workgroupBarrier();
 }
+
+// One chunk of 256 values of an exclusive prefix sum longer than a workgroup: thread lid brings
+// value v and gets (the chunk's values before its own, the chunk's total). Every thread of a
+// workgroup of 256 calls it, the same number of times (it holds barriers); the caller carries the
+// totals from one chunk to the next.
+fn scan_chunk(lid: u32, v: u32) -> vec2u {
+    partial[lid] = v;
+    scan_partial(lid, 256u);
+    let out = vec2u(partial[lid] - v, partial[255]);
+    // The next chunk overwrites `partial`.
+    workgroupBarrier();
+    return out;
+}

@@ -869,11 +869,13 @@ impl Renderer {
         let u = &setup.uniforms;
         let (eye, forward, near) = (u.eye.truncate(), u.cam_fwd.truncate(), u.cam_fwd.w);
         let near_corner = near * (1.0 + u.cam_right.w.powi(2) + u.cam_up.w.powi(2)).sqrt();
-        let mut eye_facing = Vec::new();
+        let mut eye_runs = Vec::new();
         if let Some(g) = self.geometry.as_mut() {
             g.gpu.update_light_facing(&self.ctx.queue, &scene.light, self.back_face_culling);
-            eye_facing = g.gpu.eye_facing(eye, near_corner, self.back_face_culling);
+            let eye_facing = g.gpu.eye_facing(eye, near_corner, self.back_face_culling);
             g.gpu.update_eye_sides(&self.ctx.queue, &eye_facing);
+            eye_runs = g.gpu.draw_runs(&eye_facing);
+            self.passes.surface.update_runs(&self.ctx.queue, &eye_runs);
         }
         let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
@@ -889,7 +891,6 @@ impl Renderer {
         let g = &geometry.gpu;
         // The frame: an ordered list of passes.
         if !reuse {
-            let eye_runs = g.draw_runs(&eye_facing);
             let ahead = 2.0 * near.max(1e-4);
             let eye_ccw = util::toward_is_ccw(u.view_proj, eye + forward * ahead, -forward * ahead);
             let drawing = MapDrawing {
@@ -901,7 +902,7 @@ impl Renderer {
             };
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
             let eye = EyeDrawing { runs: &eye_runs, toward_ccw: eye_ccw, cull: self.surface_culling };
-            p.surface.record(queue, &mut f.enc, v, g, targets, eye);
+            p.surface.record(&mut f.enc, v, g, targets, eye);
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
             if draws_map && !map_reused {

@@ -62,8 +62,11 @@ struct EyeList {
     lists: wgpu::Buffer,
     /// Per block of [`Surface::CULL_BLOCK`] triangles, the kept ones before it, then the total.
     blocks: wgpu::Buffer,
-    /// This frame's runs: their count, then each one's triangles (written per frame).
+    /// The runs: their count, then each one's triangles (written when they change,
+    /// [`Surface::update_runs`]).
     runs: wgpu::Buffer,
+    /// The runs `runs` holds, as triangle ranges (`None` until written).
+    written_runs: Option<Vec<[u32; 2]>>,
     /// Each run's `DrawIndexedIndirect` arguments, written by the pass.
     args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
@@ -183,6 +186,7 @@ impl Surface {
             lists,
             blocks,
             runs,
+            written_runs: None,
             args,
             bind_group,
             triangles,
@@ -226,9 +230,26 @@ impl Surface {
         });
     }
 
+    /// Uploads the runs the culling writes draw arguments for (`places`) unless the list already
+    /// holds them: they change only with the meshes' facing, so a camera move within it uploads
+    /// nothing.
+    pub fn update_runs(&mut self, queue: &wgpu::Queue, runs: &[(std::ops::Range<u32>, Facing)]) {
+        let Some(list) = self.eye_list.as_mut() else { return };
+        let ranges = runs.iter().map(|(r, _)| [r.start / 3, r.end / 3]);
+        if runs.len() > list.meshes as usize
+            || list.written_runs.as_ref().is_some_and(|w| w.iter().copied().eq(ranges.clone()))
+        {
+            return;
+        }
+        let written: Vec<[u32; 2]> = ranges.collect();
+        let mut data = vec![[written.len() as u32, 0]];
+        data.extend_from_slice(&written);
+        queue.write_buffer(&list.runs, 0, bytemuck::cast_slice(&data));
+        list.written_runs = Some(written);
+    }
+
     pub fn record(
         &self,
-        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
         geometry: &SceneGpu,
@@ -238,12 +259,13 @@ impl Surface {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some(pipelines), Some(bind_group)) = (self.pipelines.get(variant), &self.bind_group) else { return };
         let EyeDrawing { runs, toward_ccw, cull } = drawing;
-        let list = self.eye_list.as_ref().filter(|l| cull && runs.len() <= l.meshes as usize);
+        // Only with this frame's runs in the list's buffer (Renderer::render_frame updates them first).
+        let current = |l: &&EyeList| {
+            let ranges = runs.iter().map(|(r, _)| [r.start / 3, r.end / 3]);
+            l.written_runs.as_ref().is_some_and(|w| w.iter().copied().eq(ranges))
+        };
+        let list = self.eye_list.as_ref().filter(|l| cull && current(l));
         if let Some(list) = list {
-            // The runs' triangles, for their draw arguments (`places`).
-            let mut ranges = vec![[runs.len() as u32, 0]];
-            ranges.extend(runs.iter().map(|(r, _)| [r.start / 3, r.end / 3]));
-            queue.write_buffer(&list.runs, 0, bytemuck::cast_slice(&ranges));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("Surface::cull_pass"),
                 timestamp_writes: None,
