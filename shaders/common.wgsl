@@ -30,12 +30,11 @@ override GREY_MEDIUM: bool = false; // sigma_t equal in R, G and B: one channel'
 override CARTESIAN: bool = false;   // the screen-space Cartesian grid (the paper's section 2), else epipolar
 override COSINE_BINS: bool = false; // bins uniform in cos(psi) (point lights only), else uniform in psi / r
 override QUAD_RAYS: bool = true;    // every grid ray starts on four words (bins a multiple of 128): Integrate reads them as vec4u
-override GRID_SHADOWS: bool = false; // the surfaces' shadows come from the shadow volume: Integrate computes them (FLAG_GRID_SHADOWS for Composite)
+override GRID_SHADOWS: bool = false; // the surfaces' shadows come from the shadow volume: Integrate computes them, no map is drawn (Integrate, Composite, Cull)
 
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
-const FLAG_GRID_SHADOWS: u32 = 32u; // surface shadows from the shadow volume: Integrate writes them, no shadow map
 
 struct Frame {
     // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.

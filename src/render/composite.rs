@@ -38,7 +38,14 @@ impl Composite {
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<Composite, GpuError> {
         let module = lib.module(device, "composite.wgsl")?;
         let layout = CompositeBindings::layout(device, "Composite::layout", wgpu::ShaderStages::COMPUTE);
-        let pipelines = SpecialisedCompute::new(device, "Composite", module, &layout, ["main"], Specialised::Light);
+        let pipelines = SpecialisedCompute::new(
+            device,
+            "Composite",
+            module,
+            &layout,
+            ["main"],
+            Specialised::LightAndSurfaceShadows,
+        );
         Ok(Composite { pipelines, layout, bind_group: None })
     }
 

@@ -123,7 +123,7 @@ impl Cull {
                 module,
                 &layout,
                 ["cull", "cull_finish", "offsets_local", "offsets_blocks"],
-                Specialised::LightAndGrid,
+                Specialised::LightGridAndSurfaceShadows,
             ),
             layout,
             bind_groups: Vec::new(),

@@ -12,7 +12,9 @@ pub const FLAG_PHI_WRAPS: u32 = 2;
 /// Nothing scatters (no medium or a dark light): Integrate writes zeros and the voxel passes are skipped.
 pub const FLAG_NO_SCATTER: u32 = 16;
 /// The surfaces' shadows come from the shadow volume (Integrate writes them; no shadow map is
-/// drawn): set by the renderer on VSV frames ([`super::Renderer::grid_shadows`]).
+/// drawn): set by the renderer on VSV frames ([`super::Renderer::grid_shadows`]). Read on the CPU
+/// only, where it picks the passes' pipelines ([`super::Variant::grid_shadows`]): no shader
+/// branches on it.
 pub const FLAG_GRID_SHADOWS: u32 = 32;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).

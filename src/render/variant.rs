@@ -9,7 +9,9 @@
 //! constant a third of Integrate on the classroom; the Cartesian grid's and the cosine bins'
 //! branches, never taken in an epipolar frame of a sun, cost Voxelize half and Integrate a quarter
 //! of their time; Integrate's surface shadows from the grid, behind a run-time flag that a frame
-//! with the map never set, still cost that frame's Integrate 12%, session 27.)
+//! with the map never set, still cost that frame's Integrate 12%, session 27; and the other way
+//! round, Composite's shadow-map lookups and Cull's hidden-triangle test, which a grid-shadow frame
+//! never takes, cost its Composite a third and its Cull a tenth, session 29.)
 //!
 //! Pipelines are built on first use ([`VariantPipelines::prepare`], called by
 //! `Renderer::render_frame` before it records) and kept, so switching the phase function in the
@@ -37,7 +39,9 @@ pub struct Variant {
     /// reads the grid as `vec4<u32>`. Only Integrate's pipelines depend on it.
     pub quad_rays: bool,
     /// The frame's surface shadows come from the shadow volume ([`super::Renderer::grid_shadows`]):
-    /// Integrate computes them. Only Integrate's pipelines depend on it.
+    /// Integrate computes them, and the frame draws no shadow map. Integrate's pipelines depend on
+    /// it, and those of the passes that leave the map's work out of such a frame (Composite's
+    /// lookups, Cull's test of triangles the map shows hidden).
     pub grid_shadows: bool,
 }
 
@@ -122,10 +126,23 @@ pub enum Specialised {
     /// The light, the phase and whether the medium is grey (the passes that evaluate
     /// transmittance per sample: the ray march).
     LightPhaseAndMedium,
-    /// The light and the grid's axes (the voxel passes: Ranges, Cull, Voxelize).
+    /// The light and the grid's axes (the voxel passes: Ranges, Voxelize).
     LightAndGrid,
+    /// The light and where the surfaces' shadows come from (Composite: the shadow map's lookups
+    /// compile out of a grid-shadow frame's pipeline).
+    LightAndSurfaceShadows,
+    /// The light, the grid's axes and where the surfaces' shadows come from (Cull: its test of
+    /// triangles the shadow map shows hidden compiles out of a grid-shadow frame's pipeline).
+    LightGridAndSurfaceShadows,
     /// Everything: Integrate.
     All,
+}
+
+impl Specialised {
+    /// Whether the pass builds a pipeline of its own for grid-shadow frames ([`Variant::grid_shadows`]).
+    fn reads_surface_shadows(self) -> bool {
+        matches!(self, Specialised::LightAndSurfaceShadows | Specialised::LightGridAndSurfaceShadows | Specialised::All)
+    }
 }
 
 /// A pass's pipelines (or groups of pipelines, `P`), one per variant in use.
@@ -141,15 +158,18 @@ impl<P> VariantPipelines<P> {
 
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
-        // Only Integrate (`All`) reads QUAD_RAYS and GRID_SHADOWS: the others share one pipeline
-        // across grids and surface shadows.
-        let v_any_rays = Variant { quad_rays: true, grid_shadows: false, ..v };
+        // Only Integrate (`All`) reads QUAD_RAYS, and only the passes named for it GRID_SHADOWS:
+        // the others share one pipeline across grids and surface shadows.
+        let grid_shadows = v.grid_shadows && self.reads.reads_surface_shadows();
+        let v_any_rays = Variant { quad_rays: true, grid_shadows, ..v };
         let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
-            Specialised::Light => Variant { phase: 0, grey: false, ..epipolar },
+            Specialised::Light | Specialised::LightAndSurfaceShadows => Variant { phase: 0, grey: false, ..epipolar },
             Specialised::LightAndPhase => Variant { grey: false, ..epipolar },
             Specialised::LightPhaseAndMedium => epipolar,
-            Specialised::LightAndGrid => Variant { phase: 0, grey: false, ..v_any_rays },
+            Specialised::LightAndGrid | Specialised::LightGridAndSurfaceShadows => {
+                Variant { phase: 0, grey: false, ..v_any_rays }
+            }
             Specialised::All => v,
         }
     }
@@ -160,17 +180,18 @@ impl<P> VariantPipelines<P> {
         let key = self.key(v);
         if self.get(v).is_none() {
             let light = if key.point_light { "point light" } else { "directional light" };
+            let shadows = if key.grid_shadows { ", grid shadows" } else { "" };
             let label = match self.reads {
-                Specialised::Light => format!("[{light}]"),
-                Specialised::LightAndGrid => format!("[{light}{}]", key.grid_name()),
+                Specialised::Light | Specialised::LightAndSurfaceShadows => format!("[{light}{shadows}]"),
+                Specialised::LightAndGrid | Specialised::LightGridAndSurfaceShadows => {
+                    format!("[{light}{}{shadows}]", key.grid_name())
+                }
                 Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
                 // Only Integrate tells the grid's ray alignment and the surface shadows apart
                 // (implementation details, so not in the variant's name).
-                Specialised::All => format!(
-                    "[{key}{}{}]",
-                    if key.quad_rays { "" } else { ", rays off four words" },
-                    if key.grid_shadows { ", grid shadows" } else { "" }
-                ),
+                Specialised::All => {
+                    format!("[{key}{}{shadows}]", if key.quad_rays { "" } else { ", rays off four words" })
+                }
             };
             let p = build(&key.constants(), &label);
             self.built.push((key, p));
@@ -312,6 +333,7 @@ mod tests {
             assert!(!code.contains("params.z"), "{file} tells the light type by the shadow lookup's params.z");
             assert!(!code.contains("FLAG_CARTESIAN"), "{file} reads the grid's kind from the uniforms");
             assert!(!code.contains("FLAG_COSINE_BINS"), "{file} reads the bin spacing from the uniforms");
+            assert!(!code.contains("FLAG_GRID_SHADOWS"), "{file} reads the surface shadows' source from the uniforms");
         }
         let common = crate::gpu::EMBEDDED.iter().find(|(f, _)| *f == "common.wgsl").map(|(_, s)| *s).unwrap_or("");
         assert!(common.contains("override POINT_LIGHT") && common.contains("override PHASE"));
@@ -385,31 +407,60 @@ mod tests {
         assert_eq!(sun.with_grid(true, false).to_string(), "directional light, isotropic, grey medium, cartesian grid");
     }
 
-    /// Whether the grid's rays start on four words, and whether the surfaces' shadows come from
-    /// the grid, change Integrate's pipeline only, and neither is in the name users see.
+    /// Whether the grid's rays start on four words changes Integrate's pipeline only; whether the
+    /// surfaces' shadows come from the grid changes Integrate's and those of the passes that leave
+    /// the map's work out (Composite, Cull), and neither the voxel passes' nor the map's. Neither
+    /// is in the name users see.
     #[test]
-    fn only_integrate_specialises_to_the_rays_alignment_and_grid_shadows() {
+    fn the_rays_alignment_and_grid_shadows_specialise_only_the_passes_that_read_them() {
         let sun = Variant::new(false, &Phase::Isotropic, GREY);
-        for (other, i, name, (base, changed), suffix) in [
-            (sun.with_quad_rays(false), 5, "QUAD_RAYS", (1.0, 0.0), ", rays off four words"),
-            (sun.with_grid_shadows(true), 6, "GRID_SHADOWS", (0.0, 1.0), ", grid shadows"),
+        let plain = "[directional light, isotropic, grey medium".to_string();
+        for (other, i, name, (base, changed), suffix, readers) in [
+            (sun.with_quad_rays(false), 5, "QUAD_RAYS", (1.0, 0.0), ", rays off four words", vec![Specialised::All]),
+            (
+                sun.with_grid_shadows(true),
+                6,
+                "GRID_SHADOWS",
+                (0.0, 1.0),
+                ", grid shadows",
+                vec![Specialised::All, Specialised::LightAndSurfaceShadows, Specialised::LightGridAndSurfaceShadows],
+            ),
         ] {
-            let mut voxels = VariantPipelines::new(Specialised::LightAndGrid);
-            let mut integrate = VariantPipelines::new(Specialised::All);
-            let mut labels = Vec::new();
-            for v in [sun, other] {
-                voxels.prepare(v, |c, _| assert_eq!(c[i], (name, base)));
-                integrate.prepare(v, |c, label| {
-                    assert_eq!(c[i], (name, if v == sun { base } else { changed }));
-                    labels.push(label.to_string());
-                });
+            for reads in [
+                Specialised::Light,
+                Specialised::LightAndPhase,
+                Specialised::LightPhaseAndMedium,
+                Specialised::LightAndGrid,
+                Specialised::LightAndSurfaceShadows,
+                Specialised::LightGridAndSurfaceShadows,
+                Specialised::All,
+            ] {
+                let reader = readers.contains(&reads);
+                let mut pipelines = VariantPipelines::new(reads);
+                let mut labels = Vec::new();
+                for v in [sun, other] {
+                    pipelines.prepare(v, |c, label| {
+                        assert_eq!(c[i], (name, if v == sun || !reader { base } else { changed }), "{reads:?}");
+                        labels.push(label.to_string());
+                    });
+                }
+                assert_eq!(pipelines.variants().count(), if reader { 2 } else { 1 }, "{name}, {reads:?}");
+                if reader {
+                    assert!(labels[1].ends_with(&format!("{suffix}]")) && !labels[0].contains(suffix), "{labels:?}");
+                }
+                if reads == Specialised::All {
+                    assert_eq!(labels, [format!("{plain}]"), format!("{plain}{suffix}]")]);
+                }
             }
-            assert_eq!(voxels.variants().count(), 1, "{name}");
-            assert_eq!(integrate.variants().count(), 2, "{name}");
-            let plain = "[directional light, isotropic, grey medium".to_string();
-            assert_eq!(labels, [format!("{plain}]"), format!("{plain}{suffix}]")]);
             assert_eq!(other.to_string(), sun.to_string(), "{name}: not in the name users see");
         }
+        let mut composite = VariantPipelines::new(Specialised::LightAndSurfaceShadows);
+        composite
+            .prepare(sun.with_grid_shadows(true), |_, label| assert_eq!(label, "[directional light, grid shadows]"));
+        let mut cull = VariantPipelines::new(Specialised::LightGridAndSurfaceShadows);
+        cull.prepare(sun.with_grid(true, false).with_grid_shadows(true), |_, label| {
+            assert_eq!(label, "[directional light, cartesian grid, grid shadows]")
+        });
     }
 
     const GREY: [f32; 3] = [0.09, 0.09, 0.09];
