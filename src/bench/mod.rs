@@ -795,6 +795,13 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     } else {
         "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)".into()
     });
+    notes.push(if renderer.adaptive_pixels {
+        "VSV's Integrate: every other pixel along the epipolar lines, then the others where their neighbours \
+         on the line do not stand for them (`--pixels adaptive`, the default)"
+            .into()
+    } else {
+        "VSV's Integrate: every pixel (`--pixels all`)".into()
+    });
     let mut points = error_sweep(opts.quick);
     add_grids(&mut points, &opts.extra_grids);
     if let Err(e) = FrameSetup::new(scene, w, h, Method::Cartesian) {

@@ -91,6 +91,17 @@ pub enum SurfaceShadows {
     Map,
 }
 
+/// Which pixels VSV's Integrate integrates (`Renderer::adaptive_pixels`).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
+pub enum Pixels {
+    /// Every other pixel along the epipolar lines, then the others only where their two
+    /// neighbours on the line do not stand for them (integrate.wgsl, "pixels from their
+    /// neighbours"): the default.
+    Adaptive,
+    /// Every pixel.
+    All,
+}
+
 /// How the GPU frame's passes run, for `render` and `bench` alike (the renderer's own defaults
 /// where a flag is left out).
 #[derive(clap::Args)]
@@ -103,6 +114,10 @@ pub struct PassChoices {
     /// from the shadow map.
     #[arg(long, value_enum)]
     pub surface_shadows: Option<SurfaceShadows>,
+    /// Which pixels VSV integrates [default: adaptive]: `all` integrates every pixel, `adaptive`
+    /// every other one along the epipolar lines and then those their neighbours cannot stand for.
+    #[arg(long, value_enum)]
+    pub pixels: Option<Pixels>,
 }
 
 impl PassChoices {
@@ -113,6 +128,9 @@ impl PassChoices {
         }
         if let Some(from) = self.surface_shadows {
             renderer.grid_shadows = from == SurfaceShadows::Grid;
+        }
+        if let Some(pixels) = self.pixels {
+            renderer.adaptive_pixels = pixels == Pixels::Adaptive;
         }
     }
 }
@@ -469,6 +487,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let started = Instant::now();
 
     let mut pruned_z = None;
+    // Whether VSV's Integrate took the adaptive path (`--pixels`), for the JSON.
+    let mut adaptive_pixels = None;
     let mut segments_differing = None;
     // Where the view rays end, when something will be written from it.
     let depth: Option<Vec<f32>>;
@@ -503,6 +523,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
             args.passes.apply(&mut renderer);
+            // (Only VSV's and the Cartesian grid's Integrate takes it.)
+            adaptive_pixels =
+                matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(renderer.adaptive_pixels);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;
@@ -539,6 +562,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 "phi0": m.phi0, "phi_span": m.phi_span, "gamma": [m.gamma_lo, m.gamma_hi], "z": [m.z_lo, m.z_hi],
             });
             j["surface_shadows"] = serde_json::json!(if o.setup.grid_shadowed() { "grid" } else { "map" });
+            if let Some(adaptive) = adaptive_pixels {
+                j["integrated_pixels"] = serde_json::json!(if adaptive { "adaptive" } else { "all" });
+            }
         }
         if let Some(p) = &pruned_z {
             j["pruning"] = serde_json::to_value(p)?;
