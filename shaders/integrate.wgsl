@@ -575,17 +575,7 @@ fn integrate_pixel(id: vec2u) -> vec4f {
         if (back > 0.0) { z_end = min(z_end, own_shadow_start(t_s, gp, 1.0, back, 0.0)); }
         let r = Ray(gp, 0.0, z_end, 1.0);
         let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
-        // The table holds G / (pi - gamma); the ray's weight is (pi - gamma) / h with h = D sin(gamma).
-        // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
-        let x = PI - gp;
-        var ratio = 1.0 / f.axis.w;
-        if (x > 1e-4) { ratio = x / max(f.axis.w * sin_rel(gp), 1e-7 * f.axis.w); }
-        // The table has exp(-sigma_t D) factored out; it joins the log of the prefactor in one exp,
-        // so a bright light in a thick medium (sigma_t D > 87) is not flushed to 0 with exp(-sigma_t D)
-        // (numerical-stability fix, docs/stability.md, medium/thick-bright).
-        let pre = f.sigma_s.xyz * f.light_power.xyz * ratio;
-        let scale = exp(log(max(pre, vec3f(1e-38))) - f.sigma_t.xyz * f.axis.w);
-        l = select(vec3f(0.0), scale, pre > vec3f(0.0)) * max(lit, vec3f(0.0));
+        l = light_factor(gamma) * max(lit, vec3f(0.0));
     } else {
         let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
         var t_end = span.y;
@@ -599,9 +589,7 @@ fn integrate_pixel(id: vec2u) -> vec4f {
             if (back > 0.0 && t_s <= t_end) { z_end = min(z_end, own_shadow_start(t_s, gamma, z_scale, back, z_start)); }
             let r = Ray(gamma, z_start, z_end, z_scale);
             let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
-            // The deflection angle is gamma: the phase of the angle keeps the lobes' peaks exact.
-            let ph = phase_of_angle(f.sigma_s.w, gamma);
-            l = f.sigma_s.xyz * f.light_power.xyz * ph * max(lit, vec3f(0.0));
+            l = light_factor(gamma) * max(lit, vec3f(0.0));
         }
     }
     var vis = 1.0;
@@ -612,6 +600,39 @@ fn integrate_pixel(id: vec2u) -> vec4f {
         vis = surface_visibility(vec2i(id.xy), v, t_s, gamma, cos_i, vec2u(u32(x0), u32(x1)), weights);
     }
     return vec4f(l, vis);
+}
+
+// The factor of a pixel's lit sum that depends on its angle gamma to the axis alone: what its
+// light is, taken out before pixels are compared and interpolated (below), so that a point
+// light's steep 1 / sin(gamma) in view does not keep its neighbours from agreeing.
+fn light_factor(gamma: f32) -> vec3f {
+    if (is_point_light()) {
+        let gp = max(gamma, 1e-6);
+        // The table holds G / (pi - gamma); the ray's weight is (pi - gamma) / h with h = D sin(gamma).
+        // Written as x / sin(x) (x = pi - gamma) it stays finite looking straight away from the light.
+        let x = PI - gp;
+        var ratio = 1.0 / f.axis.w;
+        if (x > 1e-4) { ratio = x / max(f.axis.w * sin_rel(gp), 1e-7 * f.axis.w); }
+        // The table has exp(-sigma_t D) factored out; it joins the log of the prefactor in one exp,
+        // so a bright light in a thick medium (sigma_t D > 87) is not flushed to 0 with exp(-sigma_t D)
+        // (numerical-stability fix, docs/stability.md, medium/thick-bright).
+        let pre = f.sigma_s.xyz * f.light_power.xyz * ratio;
+        let scale = exp(log(max(pre, vec3f(1e-38))) - f.sigma_t.xyz * f.axis.w);
+        return select(vec3f(0.0), scale, pre > vec3f(0.0));
+    }
+    // The deflection angle is gamma: the phase of the angle keeps the lobes' peaks exact.
+    return f.sigma_s.xyz * f.light_power.xyz * phase_of_angle(f.sigma_s.w, gamma);
+}
+
+// Pixel p's light factor.
+fn pixel_light_factor(p: vec2u) -> vec3f {
+    let v = pixel_dir(f, vec2f(p));
+    return light_factor(gamma_of_pixel(f, vec2f(p), v));
+}
+
+// The lit sum without its light factor (0 where the factor is 0), and the visibility.
+fn normalised(v: vec4f, factor: vec3f) -> vec4f {
+    return vec4f(select(vec3f(0.0), v.xyz / factor, factor > vec3f(0.0)), v.w);
 }
 
 // ---- pixels from their neighbours ----------------------------------------------------------
@@ -630,8 +651,9 @@ fn integrate_pixel(id: vec2u) -> vec4f {
 // the same way) where
 //
 //   their view rays end on its surface (all sky, or |t_n - t| <= DEPTH_TOL t) and their values
+//   without their light factors (`light_factor`: a point light's 1 / sin(gamma), a sun's phase)
 //   agree within VALUE_TOL per channel (max - min <= VALUE_TOL max), their surfaces'
-//   visibilities within VIS_TOL,
+//   visibilities within VIS_TOL; the pixel then takes the mean times its own light factor;
 //
 // and lists the others, which `refine` integrates. Blocks within EPIPOLE_PX of the epipole (a point
 // light's singular peak there could sit on a pixel between two equal neighbours) are integrated
@@ -687,7 +709,7 @@ fn lattice_pixels(@builtin(global_invocation_id) id: vec3u) {
     if (p.x >= f.image.x || p.y >= f.image.y) { return; }
     let v = integrate_pixel(p);
     textureStore(scatter_out, vec2i(p), v);
-    lattice[(b.y * blocks_x() + b.x) * 2u + k] = v;
+    lattice[(b.y * blocks_x() + b.x) * 2u + k] = normalised(v, pixel_light_factor(p));
 }
 
 // Whether a neighbour whose view ray ends at tn lies on the same surface as a pixel whose ray ends
@@ -726,7 +748,10 @@ fn classify(@builtin(global_invocation_id) id: vec3u) {
             let lo = min(vn, vf);
             ok = stands_for(t, textureLoad(distance, vec2i(near), 0).x) && stands_for(t, textureLoad(distance, vec2i(far), 0).x)
                 && all(hi.xyz - lo.xyz <= VALUE_TOL * hi.xyz) && hi.w - lo.w <= VIS_TOL;
-            if (ok) { textureStore(scatter_out, vec2i(p), 0.5 * (vn + vf)); }
+            if (ok) {
+                let mean = 0.5 * (vn + vf);
+                textureStore(scatter_out, vec2i(p), vec4f(pixel_light_factor(p) * mean.xyz, mean.w));
+            }
         }
         if (!ok) {
             which = select(which, vec2u(p.x | (p.y << 16u)), vec2u(listed) == vec2u(0u, 1u));

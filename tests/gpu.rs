@@ -558,33 +558,35 @@ fn surface_shadows_from_the_grid_stay_finite_and_close_to_the_maps_in_the_check_
 /// with every pixel integrated (the path ran), by under 1% (relative RMSE; the neighbours agree
 /// within 1%, and a pixel between them on a continuous stretch of the line lies close to their
 /// mean), and it is no farther from the reference: within 0.05 percentage points (on the
-/// classroom at 512x512 it is closer, 0.964% against 0.992%). The scenes: a sun whose epipolar
+/// classroom at 512x512 it is closer, 0.963% against 0.992%). The scenes: a sun whose epipolar
 /// lines are nearly parallel across the view, and a point light in view, whose lines meet at its
-/// pixel, where the blocks around it are integrated whole.
+/// pixel, where the blocks around it are integrated whole and its 1 / sin(gamma) is taken out
+/// before neighbours are compared.
 #[test]
 fn adaptive_pixels_stay_as_accurate_as_every_pixel() {
     let Some(mut r) = renderer() else { return };
     let sun = Light::Directional { direction: Vec3::new(0.3, 1.0, 0.2).normalize(), irradiance: Vec3::splat(2.0) };
     let mut in_view = epivox::scene::builtin_scene();
     in_view.light = point_light(in_view.camera.eye + (in_view.camera.target - in_view.camera.eye).normalize() * 2.5);
-    // (Around a point light in view the light falls off as 1 / angle: at 96x96 no two neighbours
-    // agree within 1%, so every pixel is integrated; the check matrix's light/through-pixel cases
-    // hold the peak at larger sizes.)
-    for (name, scene, interpolates) in [
-        ("built-in room", epivox::scene::builtin_scene(), true),
-        ("occluder under the sun", occluder_scene(sun), true),
-        ("a point light in view", in_view, false),
+    // (192x192: at 96x96 two pixels on a line span as much of the view as ~11 do at 512x512, and
+    // the room measured 0.90% against 0.80%; at 192x192 0.78% against 0.76%, the occluder 0.74%
+    // against 0.74%, the light in view 0.03% against 0.02%.)
+    for (name, scene) in [
+        ("built-in room", epivox::scene::builtin_scene()),
+        ("occluder under the sun", occluder_scene(sun)),
+        ("a point light in view", in_view),
     ] {
         r.adaptive_pixels = false;
-        let all = r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        let all = r.render(&scene, 192, 192, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         r.adaptive_pixels = true;
-        let adaptive = r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-        let reference = reference::render(&scene, 96, 96, &ReferenceOptions { progress: false, ..Default::default() });
+        let adaptive = r.render(&scene, 192, 192, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        let reference =
+            reference::render(&scene, 192, 192, &ReferenceOptions { progress: false, ..Default::default() });
         let between = metrics::compare(&adaptive.scatter, &all.scatter).unwrap_or_else(|e| panic!("{e}"));
         let e_all = metrics::compare(&all.scatter, &reference.scatter).unwrap_or_else(|e| panic!("{e}"));
         let e_adaptive = metrics::compare(&adaptive.scatter, &reference.scatter).unwrap_or_else(|e| panic!("{e}"));
         eprintln!("{name}: adaptive against all {between}; against the reference {e_adaptive} (all: {e_all})");
-        assert_eq!(adaptive.scatter != all.scatter, interpolates, "{name}: whether any pixel came from its neighbours");
+        assert!(adaptive.scatter != all.scatter, "{name}: no pixel came from its neighbours");
         assert!(between.rel_rmse < 0.01, "{name}: adaptive pixels differ from every pixel by {between}");
         assert!(
             e_adaptive.rel_rmse <= e_all.rel_rmse + 5e-4,
