@@ -288,6 +288,10 @@ fn surface_shadows_from_the_grid_draw_no_map_and_json_says_so() {
     assert_eq!(map["surface_shadows"], "map");
     let march = run(&["--method", "raymarch", "--steps", "8", "--surface-shadows", "grid"]);
     assert_eq!(march["surface_shadows"], "map", "the baseline's visibility is the map's");
+    // Which pixels VSV's Integrate took (`--pixels`, adaptive by default); the baseline has none.
+    assert_eq!(map["integrated_pixels"], "adaptive");
+    assert_eq!(run(&["--pixels", "all"])["integrated_pixels"], "all");
+    assert!(march.get("integrated_pixels").is_none(), "{march}");
     // (Without timestamps no pass is listed at all.)
     if !passes(&map).is_empty() {
         assert!(passes(&map).iter().any(|p| p == "shadow_map"), "{map}");

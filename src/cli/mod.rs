@@ -524,9 +524,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.fit_shadow_map = !args.no_shadow_fit;
             args.passes.apply(&mut renderer);
             // (Only VSV's and the Cartesian grid's Integrate takes it.)
-            adaptive_pixels =
-                matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(renderer.adaptive_pixels);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
+            adaptive_pixels =
+                matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(renderer.adaptive_pixels_in_use());
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())

@@ -69,9 +69,9 @@ pub struct Integrate {
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
     adaptive: Option<Adaptive>,
-    /// Workgroups of `refine` on a CPU adapter, whose few threads each loop over the list: every
-    /// one of a GPU's many would otherwise cost a CPU adapter a pass over the shader's code
-    /// (docs/results.md, session 29).
+    /// A CPU adapter: `refine` runs a few workgroups there whose threads loop over the list (on
+    /// llvmpipe a thread with nothing to do still runs the shader's code: docs/results.md,
+    /// session 29); on a GPU one thread per pixel the list can hold.
     cpu_adapter: bool,
 }
 

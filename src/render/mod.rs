@@ -509,6 +509,13 @@ impl Renderer {
     }
 
     /// Texels per side of each shadow-map layer.
+    /// Whether VSV's frames at the bound size take the adaptive pixels: [`Renderer::adaptive_pixels`],
+    /// and the size's buffers fit the adapter (past its largest binding Integrate integrates every
+    /// pixel).
+    pub fn adaptive_pixels_in_use(&self) -> bool {
+        self.adaptive_pixels && self.passes.integrate.adaptive_available()
+    }
+
     pub fn shadow_map_size(&self) -> u32 {
         self.passes.shadow_map.size
     }
