@@ -528,12 +528,25 @@ fn plane_beside(x: u32, step: i32) -> u32 {
 fn main(@builtin(global_invocation_id) id: vec3u) {
     f = frame_in;
     if (id.x >= f.image.x || id.y >= f.image.y) { return; }
-    textureStore(scatter_out, vec2i(id.xy), integrate_pixel(id.xy));
+    textureStore(scatter_out, vec2i(id.xy), scattered(integrate_pixel(id.xy)));
 }
 
-// The scattered light of pixel `id` (rgb) and its surface's visibility of the light (a).
-fn integrate_pixel(id: vec2u) -> vec4f {
-    if ((f.image.w & FLAG_NO_SCATTER) != 0u) { return vec4f(0.0, 0.0, 0.0, 1.0); }
+// A pixel's light: its lit sum without the light factor (`light_factor`), that factor and its
+// surface's visibility of the light.
+struct PixelLight {
+    lit: vec3f,
+    factor: vec3f,
+    vis: f32,
+}
+
+// What the scattered image holds: the scattered light (rgb) and the visibility (a).
+fn scattered(p: PixelLight) -> vec4f {
+    return vec4f(p.factor * p.lit, p.vis);
+}
+
+// Pixel `id`'s light.
+fn integrate_pixel(id: vec2u) -> PixelLight {
+    if ((f.image.w & FLAG_NO_SCATTER) != 0u) { return PixelLight(vec3f(0.0), vec3f(0.0), 1.0); }
     let v = pixel_dir(f, vec2f(id.xy));
     let a = f.axis.xyz;
     let gamma = gamma_of_pixel(f, vec2f(id.xy), v);
@@ -565,7 +578,9 @@ fn integrate_pixel(id: vec2u) -> vec4f {
     let weights = vec2f(1.0 - fx, fx);
     let bases = vec2u(ray_offset(f, u32(x0), y), ray_offset(f, u32(x1), y));
 
-    var l = vec3f(0.0);
+    let factor = light_factor(gamma);
+    // The lit sum: the scattered light without its light factor.
+    var lit_sum = vec3f(0.0);
     if (is_point_light()) {
         // Within 1e-6 rad of the light the f32 angle is noise (~6e-8), so the point-light formulas use
         // gp = max(gamma, 1e-6). For a soft light (r > 0) the table's G and h = D sin(gamma) both
@@ -579,7 +594,7 @@ fn integrate_pixel(id: vec2u) -> vec4f {
         if (back > 0.0) { z_end = min(z_end, own_shadow_start(t_s, gp, 1.0, back, 0.0)); }
         let r = Ray(gp, 0.0, z_end, 1.0);
         let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
-        l = light_factor(gamma) * max(lit, vec3f(0.0));
+        lit_sum = max(lit, vec3f(0.0));
     } else {
         let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
         var t_end = span.y;
@@ -593,7 +608,7 @@ fn integrate_pixel(id: vec2u) -> vec4f {
             if (back > 0.0 && t_s <= t_end) { z_end = min(z_end, own_shadow_start(t_s, gamma, z_scale, back, z_start)); }
             let r = Ray(gamma, z_start, z_end, z_scale);
             let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
-            l = light_factor(gamma) * max(lit, vec3f(0.0));
+            lit_sum = max(lit, vec3f(0.0));
         }
     }
     var vis = 1.0;
@@ -603,7 +618,7 @@ fn integrate_pixel(id: vec2u) -> vec4f {
         let cos_i = textureLoad(material, vec2i(id.xy), 0).w;
         vis = surface_visibility(vec2i(id.xy), v, t_s, gamma, cos_i, vec2u(u32(x0), u32(x1)), weights);
     }
-    return vec4f(l, vis);
+    return PixelLight(lit_sum, factor, vis);
 }
 
 // The factor of a pixel's lit sum that depends on its angle gamma to the axis alone: what its
@@ -628,15 +643,10 @@ fn light_factor(gamma: f32) -> vec3f {
     return f.sigma_s.xyz * f.light_power.xyz * phase_of_angle(f.sigma_s.w, gamma);
 }
 
-// Pixel p's light factor.
+// Pixel p's light factor (for a pixel taken from its neighbours, which is not integrated).
 fn pixel_light_factor(p: vec2u) -> vec3f {
     let v = pixel_dir(f, vec2f(p));
     return light_factor(gamma_of_pixel(f, vec2f(p), v));
-}
-
-// The lit sum without its light factor (0 where the factor is 0), and the visibility.
-fn normalised(v: vec4f, factor: vec3f) -> vec4f {
-    return vec4f(select(vec3f(0.0), v.xyz / factor, factor > vec3f(0.0)), v.w);
 }
 
 // ---- pixels from their neighbours ----------------------------------------------------------
@@ -712,9 +722,9 @@ fn lattice_pixels(@builtin(global_invocation_id) id: vec3u) {
     let k = id.y % 2u;
     let p = block_pixel(b, block_along_x(b), k);
     if (p.x >= f.image.x || p.y >= f.image.y) { return; }
-    let v = integrate_pixel(p);
-    textureStore(scatter_out, vec2i(p), v);
-    lattice[(b.y * blocks_x() + b.x) * 2u + k] = normalised(v, pixel_light_factor(p));
+    let light = integrate_pixel(p);
+    textureStore(scatter_out, vec2i(p), scattered(light));
+    lattice[(b.y * blocks_x() + b.x) * 2u + k] = vec4f(light.lit, light.vis);
 }
 
 // Whether a neighbour whose view ray ends at tn lies on the same surface as a pixel whose ray ends
@@ -779,6 +789,6 @@ fn refine(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) gro
     for (var i = id.x; i < n; i += stride) {
         let packed = refine_list[i];
         let p = vec2u(packed & 0xffffu, packed >> 16u);
-        textureStore(scatter_out, vec2i(p), integrate_pixel(p));
+        textureStore(scatter_out, vec2i(p), scattered(integrate_pixel(p)));
     }
 }

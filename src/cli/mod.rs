@@ -523,8 +523,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
             renderer.prune = !args.no_prune;
             renderer.fit_shadow_map = !args.no_shadow_fit;
             args.passes.apply(&mut renderer);
-            // (Only VSV's and the Cartesian grid's Integrate takes it.)
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
+            // (Only VSV's and the Cartesian grid's Integrate takes it.)
             adaptive_pixels =
                 matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(renderer.adaptive_pixels_in_use());
             pruned_z = Some(renderer.prune_report(&o.info())?);
