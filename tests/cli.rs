@@ -313,9 +313,9 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     // Half the scattered light: a change of the image, not of the work.
     let integrate = edited.join("integrate.wgsl");
     let src = std::fs::read_to_string(&integrate).unwrap();
-    let store = "return vec4f(l, vis);";
+    let store = "return vec4f(p.factor * p.lit, p.vis);";
     assert!(src.contains(store), "integrate.wgsl's result changed: update this test's edit");
-    std::fs::write(&integrate, src.replace(store, "return vec4f(0.5 * l, vis);")).unwrap();
+    std::fs::write(&integrate, src.replace(store, "return vec4f(0.5 * p.factor * p.lit, p.vis);")).unwrap();
     let run = |a: &Path, b: &Path| -> serde_json::Value {
         let args = [
             "ab",
