@@ -796,7 +796,7 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)".into()
     });
     notes.push(if renderer.adaptive_pixels {
-        "VSV's Integrate: every other pixel along the epipolar lines, then the others where their neighbours \
+        "VSV's Integrate: every fourth pixel along the epipolar lines, then the others where their neighbours \
          on the line do not stand for them (`--pixels adaptive`, the default)"
             .into()
     } else {

@@ -115,7 +115,7 @@ pub struct PassChoices {
     #[arg(long, value_enum)]
     pub surface_shadows: Option<SurfaceShadows>,
     /// Which pixels VSV integrates [default: adaptive]: `all` integrates every pixel, `adaptive`
-    /// every other one along the epipolar lines and then those their neighbours cannot stand for.
+    /// every fourth one along the epipolar lines and then those their neighbours cannot stand for.
     #[arg(long, value_enum)]
     pub pixels: Option<Pixels>,
 }

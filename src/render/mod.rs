@@ -380,13 +380,13 @@ pub struct Renderer {
     /// (`--surface-shadows grid`). A frame with nothing to scatter has no shadow volume and uses
     /// the map either way.
     pub grid_shadows: bool,
-    /// Integrate every other pixel along the epipolar lines (the shafts run along them), then
-    /// each other pixel from its two neighbours on the line where they lie on its surface and
-    /// agree within 1%, and integrate only the rest ([`Integrate`], `integrate.wgsl`, "pixels
-    /// from their neighbours"). On by default: on the classroom it integrates 59% of the pixels
-    /// (Integrate ~25% faster on llvmpipe), and the scattered light's error against the reference
-    /// is lower, not higher (0.992% -> 0.964%; docs/results.md, session 29). Off (`--pixels
-    /// all`) integrates every pixel.
+    /// Integrate every fourth pixel along the epipolar lines (the shafts run along them), then
+    /// the pixels between, coarse to fine, from their two neighbours on the line where they lie
+    /// on its surface and agree within 1% or lie on a straight stretch, and integrate only the
+    /// rest ([`Integrate`], `integrate.wgsl`, "pixels from their neighbours"). On by default: on
+    /// the classroom it integrates 43% of the pixels (Integrate ~30% faster on llvmpipe), and the
+    /// scattered light's error against the reference is lower, not higher (0.992% -> 0.985%;
+    /// docs/results.md, session 30). Off (`--pixels all`) integrates every pixel.
     pub adaptive_pixels: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
