@@ -107,8 +107,8 @@ impl Integrate {
     /// when the targets or the grid change.
     pub fn bind(&mut self, device: &wgpu::Device, inputs: IntegrateInputs) {
         let (w, h) = (inputs.width.max(1) as u64, inputs.height.max(1) as u64);
-        // A vec4<f32> a pixel (written for pixels 0 and 2 of each row of four); at most one pixel a
-        // row of four in the first list and two in the second.
+        // A vec4<f32> a pixel (written for pixels 0 and 2 of each strip of four); at most one pixel
+        // a strip in the first list and two in the second.
         let values_bytes = 16 * w * h;
         let list_bytes = 4 * 3 * Self::strips(w, h);
         let limits = device.limits();
@@ -154,7 +154,7 @@ impl Integrate {
         16 * w.div_ceil(8) * h.div_ceil(8)
     }
 
-    /// Every pixel, or with `adaptive` (where [`Integrate::adaptive_available`]) one pixel a row
+    /// Every pixel, or with `adaptive` (where [`Integrate::adaptive_available`]) one pixel a strip
     /// of four, then the others from their neighbours or integrated.
     pub fn record(
         &self,
