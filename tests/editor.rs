@@ -772,3 +772,29 @@ fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
     h.run();
     assert!(!picker(&h), "the shadow-map size is disabled for the baseline");
 }
+
+/// The toolbar's "adaptive pixels" (`Renderer::adaptive_pixels`, on by default): a click renders
+/// again with every pixel integrated, and the frame says which it did; the picture stays the same
+/// to the eye (the pixels from their neighbours are within 1% of their own integrals).
+#[test]
+fn adaptive_pixels_are_one_click_and_the_frame_says_which_pixels_it_integrated() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let (before, ..) = viewport_pixels(&mut h);
+    let adaptive = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.adaptive_pixels;
+    assert!(h.state().ed().adaptive_pixels(), "adaptive pixels are not the editor's default");
+    assert!(adaptive(&h), "the default frame integrated every pixel");
+    h.get_by_label("adaptive pixels").click();
+    h.run();
+    assert!(!h.state().ed().adaptive_pixels(), "the click did not reach the view");
+    let (after, ..) = viewport_pixels(&mut h);
+    assert!(!adaptive(&h), "the frame after the click still took pixels from their neighbours");
+    // 8-bit sRGB of the final image: a difference of 1% in the scattered light moves a pixel by
+    // at most a level or two.
+    let diff = mean_diff(&before, &after);
+    assert!(diff < 1.0, "the picture changed by {diff:.2} of 255");
+    // The baseline has no Integrate: the switch is not offered.
+    h.state_mut().ed_mut().apply(Command::SetMethod(epivox::render::Method::Raymarch { steps: 64, jitter: true }));
+    h.run();
+    assert!(h.query_by_label("adaptive pixels").is_none(), "the baseline offers adaptive pixels");
+}

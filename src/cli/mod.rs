@@ -525,8 +525,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             args.passes.apply(&mut renderer);
             let o = renderer.render(&scene, w, h, method).with_context(|| source.clone())?;
             // (Only VSV's and the Cartesian grid's Integrate takes it.)
-            adaptive_pixels =
-                matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(renderer.adaptive_pixels_in_use());
+            adaptive_pixels = matches!(method, GpuMethod::Vsv | GpuMethod::Cartesian).then_some(o.adaptive_pixels);
             pruned_z = Some(renderer.prune_report(&o.info())?);
             depth = args.depth_exr.is_some().then(|| renderer.read_view_distances()).transpose()?;
             (o.hdr.clone(), o.scatter.clone(), Some(o), renderer.ctx.adapter_name())

@@ -361,6 +361,11 @@ impl Editor {
     pub fn grid_shadows(&self) -> bool {
         self.view.grid_shadows
     }
+
+    /// Whether Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
+    pub fn adaptive_pixels(&self) -> bool {
+        self.view.adaptive_pixels
+    }
     /// The newest render request's generation (changes whenever the picture must be redrawn).
     pub fn generation(&self) -> u64 {
         self.jobs.render.generation

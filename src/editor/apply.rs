@@ -73,6 +73,7 @@ impl Editor {
                 }
             }
             Command::SetGridShadows(on) => view.grid_shadows = on,
+            Command::SetAdaptivePixels(on) => view.adaptive_pixels = on,
             Command::SetRenderScale(s) => view.render_scale = s.clamp(0.1, 1.0),
             Command::SetCameraMode(m) => view.camera.mode = m,
             Command::SetExposureMode(m) => view.exposure_mode = m,
@@ -160,6 +161,7 @@ impl Editor {
             method: view.method,
             shadow_map: view.shadow_map,
             grid_shadows: view.grid_shadows,
+            adaptive_pixels: view.adaptive_pixels,
             width,
             height,
             scene_generation: doc.scene_generation,
@@ -189,6 +191,7 @@ impl Editor {
             method: content.method,
             shadow_map: content.shadow_map,
             grid_shadows: content.grid_shadows,
+            adaptive_pixels: content.adaptive_pixels,
             interactive,
             progressive: !forcing,
             grids: content.grids,

@@ -46,6 +46,9 @@ pub enum Command {
     SetShadowMap(u32),
     /// VSV's surface shadows from the shadow volume (true) or the shadow map.
     SetGridShadows(bool),
+    /// Integrate takes pixels from their neighbours along the epipolar lines (true) or integrates
+    /// every pixel (`Renderer::adaptive_pixels`).
+    SetAdaptivePixels(bool),
     /// Fraction of the viewport's pixels the renderer draws at (1 = every pixel).
     SetRenderScale(f32),
     SetCameraMode(CameraMode),

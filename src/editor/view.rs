@@ -109,6 +109,9 @@ pub struct View {
     /// VSV's surface shadows from the shadow volume, with no shadow map drawn
     /// (`Renderer::grid_shadows`).
     pub grid_shadows: bool,
+    /// Integrate takes pixels from their neighbours along the epipolar lines, or integrates every
+    /// pixel (`Renderer::adaptive_pixels`).
+    pub adaptive_pixels: bool,
     /// Fraction of the viewport's pixels a full-quality frame has (1 = every pixel).
     pub render_scale: f32,
     pub camera: CameraController,
@@ -127,6 +130,7 @@ impl Default for View {
             raymarch_steps: Baseline::default().steps,
             shadow_map: Baseline::default().shadow_map,
             grid_shadows: false,
+            adaptive_pixels: true,
             render_scale: 1.0,
             camera: CameraController::default(),
             exposure_mode: ExposureMode::default(),

@@ -84,6 +84,8 @@ pub struct RenderOutput {
     pub reused: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
+    /// Whether Integrate took pixels from their neighbours ([`FrameInfo::adaptive_pixels`]).
+    pub adaptive_pixels: bool,
 }
 
 /// What one frame produced on the GPU side (timings and the fitted grid), without images.
@@ -100,6 +102,10 @@ pub struct FrameInfo {
     pub reused: Vec<Pass>,
     /// The shader variant the passes ran as.
     pub variant: Variant,
+    /// Whether Integrate took the pixels between from their neighbours
+    /// ([`Renderer::adaptive_pixels`], where the image's buffers fit the adapter); false when it
+    /// integrated every pixel or did not run.
+    pub adaptive_pixels: bool,
 }
 
 impl FrameInfo {
@@ -145,6 +151,7 @@ impl RenderOutput {
             passes: self.passes.clone(),
             reused: self.reused.clone(),
             variant: self.variant,
+            adaptive_pixels: self.adaptive_pixels,
         }
     }
 
@@ -1031,7 +1038,8 @@ impl Renderer {
         }
         let mut passes = ran;
         passes.dedup();
-        Ok(FrameInfo { timings, setup, passes, reused, variant })
+        let adaptive_pixels = passes.contains(&Pass::Integrate) && self.adaptive_pixels_in_use();
+        Ok(FrameInfo { timings, setup, passes, reused, variant, adaptive_pixels })
     }
 
     /// Renders one frame and reads the final and the scattered image back to the CPU.
@@ -1049,7 +1057,7 @@ impl Renderer {
     /// Reads back the final and the scattered image that the frame `info` (the last one
     /// [`Renderer::render_frame`] returned) left in the targets: what [`Renderer::render`] returns.
     pub fn read_output(&self, info: FrameInfo) -> Result<RenderOutput, RenderError> {
-        let FrameInfo { timings, setup, passes, reused, variant } = info;
+        let FrameInfo { timings, setup, passes, reused, variant, adaptive_pixels } = info;
         let (width, height) = (setup.width, setup.height);
         let t = self.targets.as_ref().ok_or_else(|| GpuError::Readback("no targets".into()))?;
         let to_image = |data: Vec<f32>| {
@@ -1061,7 +1069,7 @@ impl Renderer {
         };
         let hdr = to_image(self.ctx.read_texture_rgba32f(&t.hdr)?);
         let scatter = to_image(self.ctx.read_texture_rgba32f(&t.scatter)?);
-        Ok(RenderOutput { hdr, scatter, timings, setup, passes, reused, variant })
+        Ok(RenderOutput { hdr, scatter, timings, setup, passes, reused, variant, adaptive_pixels })
     }
 
     /// Where the last frame's view rays end: the distance along each pixel's unit view ray to the

@@ -599,6 +599,7 @@ impl Worker {
             return fail(self, e.to_string());
         }
         lane.renderer.grid_shadows = r.grid_shadows;
+        lane.renderer.adaptive_pixels = r.adaptive_pixels;
         let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,
             Err(e) => return fail(self, e.to_string()),

@@ -152,6 +152,17 @@ impl Toolbar {
                 out.push(Command::SetGridShadows(on));
             }
         }
+        if matches!(view.method, Method::Vsv | Method::Cartesian) {
+            let mut on = view.adaptive_pixels;
+            let r = ui.checkbox(&mut on, "adaptive pixels").on_hover_text(
+                "Integrate every fourth pixel along the epipolar lines, then the pixels between from their \
+                 neighbours on the line where those agree (43% of the classroom's pixels integrated, as \
+                 accurate); off: every pixel integrated",
+            );
+            if r.changed() {
+                out.push(Command::SetAdaptivePixels(on));
+            }
+        }
     }
 
     /// The look's exposure; in the scattered-only view its own, automatic by default.
