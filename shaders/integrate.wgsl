@@ -783,37 +783,45 @@ fn stands_for(t: f32, tn: f32) -> bool {
     return abs(tn - t) <= DEPTH_TOL * t;
 }
 
+// Whether pixel p was taken from its neighbours, and the mean it took (its lit sum without the
+// light factor, and its visibility).
+struct Taken {
+    ok: bool,
+    mean: vec4f,
+}
+
 // Pixel p of block b from its neighbours `back` steps back and `on` steps on where they stand for
-// it (above): then it is stored, its mean in `mean`.
-fn from_neighbours(p: vec2u, b: vec2u, along_x: bool, back: i32, on: i32) -> bool {
+// it (above): then it is stored in the image.
+fn from_neighbours(p: vec2u, b: vec2u, along_x: bool, back: i32, on: i32) -> Taken {
+    var taken = Taken(false, vec4f(0.0));
     let step = block_step(b, along_x);
     let a = vec2i(p) - back * step;
     let c = vec2i(p) + on * step;
-    if (block_near_epipole(b) || !lends(a, along_x) || !lends(c, along_x)) { return false; }
+    if (block_near_epipole(b) || !lends(a, along_x) || !lends(c, along_x)) { return taken; }
     let va = values[value_index(vec2u(a))];
     let vc = values[value_index(vec2u(c))];
     let t = textureLoad(distance, vec2i(p), 0).x;
     let hi = max(va, vc);
     let lo = min(va, vc);
-    var ok = stands_for(t, textureLoad(distance, a, 0).x) && stands_for(t, textureLoad(distance, c, 0).x) && hi.w - lo.w <= VIS_TOL;
-    var flat = all(hi.xyz - lo.xyz <= VALUE_TOL * hi.xyz);
+    let ok = stands_for(t, textureLoad(distance, a, 0).x) && stands_for(t, textureLoad(distance, c, 0).x) && hi.w - lo.w <= VIS_TOL;
+    var agree = all(hi.xyz - lo.xyz <= VALUE_TOL * hi.xyz);
     // Or a straight stretch: the pixels as far again beyond either neighbour continue the line
     // through them.
     let span = back + on;
     let a2 = a - span * step;
     let c2 = c + span * step;
-    if (ok && !flat && lends(a2, along_x) && lends(c2, along_x)) {
+    if (ok && !agree && lends(a2, along_x) && lends(c2, along_x)) {
         let va2 = values[value_index(vec2u(a2))].xyz;
         let vc2 = values[value_index(vec2u(c2))].xyz;
         let top = max(max(hi.xyz, va2), vc2);
-        flat = all(abs(va2 - 2.0 * va.xyz + vc.xyz) <= VALUE_TOL * top) && all(abs(va.xyz - 2.0 * vc.xyz + vc2) <= VALUE_TOL * top);
+        agree = all(abs(va2 - 2.0 * va.xyz + vc.xyz) <= VALUE_TOL * top) && all(abs(va.xyz - 2.0 * vc.xyz + vc2) <= VALUE_TOL * top);
     }
-    ok = ok && flat;
-    if (ok) {
-        mean = 0.5 * (va + vc);
-        textureStore(scatter_out, vec2i(p), vec4f(pixel_light_factor(p) * mean.xyz, mean.w));
+    taken.ok = ok && agree;
+    if (taken.ok) {
+        taken.mean = 0.5 * (va + vc);
+        textureStore(scatter_out, vec2i(p), vec4f(pixel_light_factor(p) * taken.mean.xyz, taken.mean.w));
     }
-    return ok;
+    return taken;
 }
 
 // Whether pixel q can lend its value along a block's step: it lies in the image, in a block that
@@ -821,8 +829,6 @@ fn from_neighbours(p: vec2u, b: vec2u, along_x: bool, back: i32, on: i32) -> boo
 fn lends(q: vec2i, along_x: bool) -> bool {
     return inside(q) && block_along_x(vec2u(q) / BLOCK) == along_x;
 }
-
-var<private> mean: vec4f;
 
 // A strip of four pixels along its block's axis: its block, the block's way and its pixel 0.
 struct Strip {
@@ -874,8 +880,9 @@ fn classify_mid(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_inde
 fn mid_pixel(s: Strip) -> Listed {
     let p = strip_pixel(s, 2u);
     if (!inside(vec2i(p))) { return Listed(0u, vec2u(0u)); }
-    if (from_neighbours(p, s.b, s.along_x, 2, 2)) {
-        values[value_index(p)] = mean;
+    let taken = from_neighbours(p, s.b, s.along_x, 2, 2);
+    if (taken.ok) {
+        values[value_index(p)] = taken.mean;
         return Listed(0u, vec2u(0u));
     }
     return Listed(1u, vec2u(pack(p), 0u));
@@ -933,10 +940,10 @@ fn fine_pixels(s: Strip) -> Listed {
     let p1 = strip_pixel(s, 1u);
     let p3 = strip_pixel(s, 3u);
     if (!inside(vec2i(p1))) { return listed; }
-    if (!from_neighbours(p1, s.b, s.along_x, 1, 1)) {
+    if (!from_neighbours(p1, s.b, s.along_x, 1, 1).ok) {
         listed = Listed(1u, vec2u(pack(p1), 0u));
     }
-    if (inside(vec2i(p3)) && !from_neighbours(p3, s.b, s.along_x, 1, 1)) {
+    if (inside(vec2i(p3)) && !from_neighbours(p3, s.b, s.along_x, 1, 1).ok) {
         listed.pixels = select(listed.pixels, vec2u(pack(p3)), vec2u(listed.count) == vec2u(0u, 1u));
         listed.count++;
     }

@@ -515,14 +515,14 @@ impl Renderer {
         self.passes.shadow_map.has_face_lists()
     }
 
-    /// Texels per side of each shadow-map layer.
     /// Whether VSV's frames at the bound size take the adaptive pixels: [`Renderer::adaptive_pixels`],
     /// and the size's buffers fit the adapter (past its largest binding Integrate integrates every
-    /// pixel).
-    pub fn adaptive_pixels_in_use(&self) -> bool {
+    /// pixel). Frames report it ([`FrameInfo::adaptive_pixels`]).
+    fn adaptive_pixels_in_use(&self) -> bool {
         self.adaptive_pixels && self.passes.integrate.adaptive_available()
     }
 
+    /// Texels per side of each shadow-map layer.
     pub fn shadow_map_size(&self) -> u32 {
         self.passes.shadow_map.size
     }

@@ -156,8 +156,7 @@ impl Toolbar {
             let mut on = view.adaptive_pixels;
             let r = ui.checkbox(&mut on, "adaptive pixels").on_hover_text(
                 "Integrate every fourth pixel along the epipolar lines, then the pixels between from their \
-                 neighbours on the line where those agree (43% of the classroom's pixels integrated, as \
-                 accurate); off: every pixel integrated",
+                 neighbours on the line where those agree (faster, as accurate); off: every pixel integrated",
             );
             if r.changed() {
                 out.push(Command::SetAdaptivePixels(on));
