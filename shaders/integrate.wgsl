@@ -207,14 +207,16 @@ struct Ray {
     // The view ray's extent in z: from the eye (or the medium's box) to the surface.
     z_start: f32,
     z_end: f32,
-    // Directional: t = z / z_scale.
+    // Directional: t = z / z_scale, and 1 / z_scale (every shadow boundary converts a z to t:
+    // a product, not a division, which llvmpipe runs in full for a SIMD group, session 31).
     z_scale: f32,
+    t_per_z: f32,
 }
 
 fn cumulative(r: Ray, z: f32) -> vec3f {
     let zc = clamp(z, r.z_start, r.z_end);
     if (is_point_light()) { return table_g(r.gamma, zc); }
-    return along(zc / max(r.z_scale, 1e-12));
+    return along(zc * r.t_per_z);
 }
 
 // sum_j C(z_j) (q_{j-1} - q_j) over one plane's grid ray at `base`, q_j = 1 where bin j is lit
@@ -233,6 +235,7 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
     }
     // Words past `last` hold bins beyond z_end only: the end term below covers them.
     let lanes = vec4u(0u, 1u, 2u, 3u);
+    let z_per_bin = (f.ranges.w - f.ranges.z) / f32(f.grid.z);
     for (var g = first / 4u; g <= last / 4u; g++) {
         let q = quad(base, g);
         let w = vec4u(g * 4u) + lanes;
@@ -253,7 +256,7 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
             // The first and last bins reach a quarter bin past the range on both planes (one of
             // them by its offset, the other because its sample is the nearest there).
             let j = (g * 4u + c) * 32u + i;
-            let z = z_of_bin(f, select(f32(j) + offset, -0.25, j == 0u));
+            let z = z_at(select(f32(j) + offset, -0.25, j == 0u), z_per_bin);
             // A lit bin begins (q: 0 -> 1) where the bit is clear, a shadowed one where it is set.
             let lit_after = ((pick(q, c) >> i) & 1u) == 0u;
             if (z >= r.z_end) {
@@ -267,6 +270,13 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
     }
     // The boundary after the last bin (C clamps it to z_end when the ray ends first).
     return sum + select(vec3f(0.0), ends.z_hi, carry == 0u);
+}
+
+// z_of_bin(f, k), for uniform bins as a product with the bins' width (passed in, computed once per
+// grid ray): a shadow boundary's z without a division.
+fn z_at(k: f32, z_per_bin: f32) -> f32 {
+    if (COSINE_BINS) { return z_of_bin(f, k); }
+    return f.ranges.z + k * z_per_bin;
 }
 
 // Component c of a vector of four words, without a dynamic index (on llvmpipe one that differs
@@ -593,7 +603,7 @@ fn integrate_pixel(id: vec2u) -> PixelLight {
         if (t_s >= 0.0) { psi_s = min(z_along(f, gp, t_s), psi_s); }
         var z_end = psi_s;
         if (back > 0.0) { z_end = min(z_end, own_shadow_start(t_s, gp, 1.0, back, 0.0)); }
-        let r = Ray(gp, 0.0, z_end, 1.0);
+        let r = Ray(gp, 0.0, z_end, 1.0, 1.0);
         let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
         lit_sum = max(lit, vec3f(0.0));
     } else {
@@ -607,7 +617,7 @@ fn integrate_pixel(id: vec2u) -> PixelLight {
             let z_start = span.x * z_scale;
             var z_end = t_end * z_scale;
             if (back > 0.0 && t_s <= t_end) { z_end = min(z_end, own_shadow_start(t_s, gamma, z_scale, back, z_start)); }
-            let r = Ray(gamma, z_start, z_end, z_scale);
+            let r = Ray(gamma, z_start, z_end, z_scale, 1.0 / max(z_scale, 1e-12));
             let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
             lit_sum = max(lit, vec3f(0.0));
         }
