@@ -4,7 +4,20 @@
 // triangle). psi (at a point light) over a segment is extremal at its ends or at one stationary
 // point (closed form below); over a triangle, on its edges unless the axis pierces it. gamma (at
 // the eye, from the axis) only culls, and comes from the triangle's bounding ball: within
-// asin(radius / distance) of its centre's.
+// asin(radius / distance) of its centre's. Every angle here is a bound with a margin, so they
+// come from atan2_approx (common.wgsl, 1.7e-6 rad), which halved Cull at a million triangles on
+// llvmpipe (session 31): the margins below cover it.
+
+// The angle between directions a and b, and phi of direction v (common.wgsl's, from atan2_approx).
+fn bound_angle(a: vec3f, b: vec3f) -> f32 {
+    return atan2_approx(length(cross(a, b)), dot(a, b));
+}
+
+fn bound_phi(v: vec3f) -> f32 {
+    var p = atan2_approx(dot(v, f.b2.xyz), dot(v, f.b1.xyz));
+    if (p < 0.0) { p += TAU; }
+    return p;
+}
 
 // Angle at `origin` between direction c (unit) and the points of segment [p, q], given the end
 // points' angles ap and aq: min and max, from the ends and the segment's one stationary point.
@@ -19,7 +32,7 @@ fn segment_angle_range(origin: vec3f, c: vec3f, p: vec3f, q: vec3f, ap: f32, aq:
     if (abs(den) > 1e-30) {
         let s = (uc * uw - wc * dot(u, u)) / den;
         if (s > 0.0 && s < 1.0) {
-            let a = angle_between(c, u + s * w);
+            let a = bound_angle(c, u + s * w);
             r = vec2f(min(r.x, a), max(r.y, a));
         }
     }
@@ -81,11 +94,12 @@ fn bounding_ball(p0: vec3f, p1: vec3f, p2: vec3f) -> vec4f {
 
 // The angle between direction `dir` (unit) and the points of a ball of radius r at offset `u`
 // from the angle's origin: within asin(r / |u|) of the centre's, clamped to [0, pi]; every angle
-// when the ball holds the origin. The extra 1e-6 rad covers the f32 rounding of atan2 and asin.
+// when the ball holds the origin. ANGLE_MARGIN covers atan2_approx's error and the f32 rounding
+// of it and asin.
 fn ball_angle_range(u: vec3f, dir: vec3f, r: f32) -> vec2f {
     let d = length(u);
-    let centre = angle_between(dir, u);
-    let half = select(asin(min(r / d, 1.0)) + 1e-6, PI, r >= d * (1.0 - 1e-6));
+    let centre = bound_angle(dir, u);
+    let half = select(asin(min(r / d, 1.0)) + ANGLE_MARGIN, PI, r >= d * (1.0 - 1e-6));
     return vec2f(max(centre - half, 0.0), min(centre + half, PI));
 }
 
@@ -93,8 +107,10 @@ fn ball_angle_range(u: vec3f, dir: vec3f, r: f32) -> vec2f {
 
 // Planes' margin around a triangle's arc, in planes: f32 puts an arc's end (atan2 of a vertex,
 // less the first plane's angle, times planes / span) within ~1e-3 plane of its true value at 8192
-// planes over the full circle, the finest grid.
+// planes over the full circle. Plus ANGLE_MARGIN in radians (atan2_approx's 1.7e-6 and f32's
+// rounding of it), which is more than a plane where the planes span a narrow wedge.
 const PLANE_MARGIN: f32 = 0.015625;
+const ANGLE_MARGIN: f32 = 4e-6;
 
 // Cartesian: the rectangle (x0, y0, x1, y1) of the triangle's screen projection; empty (x0 >= x1)
 // when it is culled. A triangle crossing the eye's plane covers the whole screen (conservative).
@@ -164,7 +180,7 @@ fn triangle_rects(p0: vec3f, p1: vec3f, p2: vec3f) -> Rects {
     var sx1 = 0.0;
     if (!full_phi) {
         // (the arc test below assumes the triangle subtends less than pi around the axis)
-        let ph = sort3(vec3f(phi_of_dir(f, p0 - e), phi_of_dir(f, p1 - e), phi_of_dir(f, p2 - e)));
+        let ph = sort3(vec3f(bound_phi(p0 - e), bound_phi(p1 - e), bound_phi(p2 - e)));
         let gaps = vec3f(ph.y - ph.x, ph.z - ph.y, TAU - ph.z + ph.x);
         var start = ph.y;
         var len = TAU - gaps.x;
@@ -176,14 +192,15 @@ fn triangle_rects(p0: vec3f, p1: vec3f, p2: vec3f) -> Rects {
         var u0 = start - f.b1.w;
         u0 = u0 - floor(u0 / TAU) * TAU;
         let scale = planes / span;
+        let margin = PLANE_MARGIN + ANGLE_MARGIN * scale;
         // Planes are samples at their centres (x + 1/2 in plane units): the ones the arc holds,
-        // widened by PLANE_MARGIN for f32 (the arc's ends come from atan2 of the vertices, the
+        // widened by the margin for f32 (the arc's ends come from atan2 of the vertices, the
         // voxelizer's test from the plane's own normal). None when the arc lies between two
         // centres. Taking every cell the arc touched gave Voxelize 3.5% more items on the
         // classroom and 47% more on the bunny, none of which could cut the triangle (session 12).
         if ((f.image.w & FLAG_PHI_WRAPS) != 0u) {
-            x0 = ceil(u0 * scale - 0.5 - PLANE_MARGIN);
-            x1 = floor((u0 + len) * scale - 0.5 + PLANE_MARGIN) + 1.0;
+            x0 = ceil(u0 * scale - 0.5 - margin);
+            x1 = floor((u0 + len) * scale - 0.5 + margin) + 1.0;
             if (x1 > planes) {
                 second = true;
                 sx0 = 0.0;
@@ -201,8 +218,8 @@ fn triangle_rects(p0: vec3f, p1: vec3f, p2: vec3f) -> Rects {
             var hi = u0 + len;
             if (hi > TAU) { lo -= TAU; hi -= TAU; } // the arc crosses the wedge's start
             // Outside the visible wedge, or between two centres: x0 >= x1, culled.
-            x0 = max(ceil(lo * scale - 0.5 - PLANE_MARGIN), 0.0);
-            x1 = min(floor(hi * scale - 0.5 + PLANE_MARGIN) + 1.0, planes);
+            x0 = max(ceil(lo * scale - 0.5 - margin), 0.0);
+            x1 = min(floor(hi * scale - 0.5 + margin) + 1.0, planes);
         }
     }
     if (full_phi) {
@@ -230,9 +247,9 @@ fn triangle_z_range(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
         // is computed once for its two edges.
         let l = f.light.xyz;
         let c = normalize(e - l);
-        let a0 = angle_between(c, p0 - l);
-        let a1 = angle_between(c, p1 - l);
-        let a2 = angle_between(c, p2 - l);
+        let a0 = bound_angle(c, p0 - l);
+        let a1 = bound_angle(c, p1 - l);
+        let a2 = bound_angle(c, p2 - l);
         let r0 = segment_angle_range(l, c, p0, p1, a0, a1);
         let r1 = segment_angle_range(l, c, p1, p2, a1, a2);
         let r2 = segment_angle_range(l, c, p2, p0, a2, a0);
@@ -241,7 +258,9 @@ fn triangle_z_range(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
         if (hit.x > 0.5) {
             if (hit.y > 0.0) { r.x = 0.0; } else { r.y = PI; }
         }
-        return r;
+        // The angles' margin (atan2_approx): the bins' own quarter-bin margin (Cull's word_range)
+        // is less than it where many bins span a narrow range of psi.
+        return r + vec2f(-ANGLE_MARGIN, ANGLE_MARGIN);
     }
     let r0 = segment_axis_distance_range(p0, p1);
     let r1 = segment_axis_distance_range(p1, p2);
