@@ -139,8 +139,8 @@ fn angle_between(a: vec3f, b: vec3f) -> f32 {
 // (the polynomial's largest error, measured in f64) plus f32's rounding, and 0 at (0, 0). For
 // angles that only bin or bound (Voxelize's hit cells, Cull's ranges, which have margins above
 // it), never for the angles Integrate integrates over. The built-in atan2's range reduction and
-// quadrant logic cost llvmpipe, which runs it in full for a SIMD group, about half of Cull's time
-// at a million triangles and a tenth of Voxelize's (session 31).
+// quadrant logic, which llvmpipe runs in full for a SIMD group, cost a tenth of Cull's time at a
+// million triangles and of the classroom's Voxelize (session 31).
 fn atan2_approx(y: f32, x: f32) -> f32 {
     let ax = abs(x);
     let ay = abs(y);
@@ -228,6 +228,14 @@ fn z_of_bin(f: Frame, k: f32) -> f32 {
         return 2.0 * atan2(sqrt(max(sh * sh + p, 0.0)), sqrt(max(ch * ch - p, 0.0)));
     }
     return f.ranges.z + s * (f.ranges.w - f.ranges.z);
+}
+
+// z_of_bin with the bins' width z_per_bin = (ranges.w - ranges.z) / bins computed by the caller
+// once: for uniform bins a product, not a division, in the loops over bins (Voxelize's walk,
+// Integrate's shadow boundaries; llvmpipe runs a division in full for a SIMD group, session 31).
+fn z_of_bin_step(f: Frame, k: f32, z_per_bin: f32) -> f32 {
+    if (COSINE_BINS) { return z_of_bin(f, k); }
+    return f.ranges.z + k * z_per_bin;
 }
 
 // Interleaved bins: plane x samples its light rays at z(k + 1/2 + bin_offset(x)), a quarter bin

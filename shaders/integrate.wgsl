@@ -256,7 +256,7 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
             // The first and last bins reach a quarter bin past the range on both planes (one of
             // them by its offset, the other because its sample is the nearest there).
             let j = (g * 4u + c) * 32u + i;
-            let z = z_at(select(f32(j) + offset, -0.25, j == 0u), z_per_bin);
+            let z = z_of_bin_step(f, select(f32(j) + offset, -0.25, j == 0u), z_per_bin);
             // A lit bin begins (q: 0 -> 1) where the bit is clear, a shadowed one where it is set.
             let lit_after = ((pick(q, c) >> i) & 1u) == 0u;
             if (z >= r.z_end) {
@@ -270,13 +270,6 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
     }
     // The boundary after the last bin (C clamps it to z_end when the ray ends first).
     return sum + select(vec3f(0.0), ends.z_hi, carry == 0u);
-}
-
-// z_of_bin(f, k), for uniform bins as a product with the bins' width (passed in, computed once per
-// grid ray): a shadow boundary's z without a division.
-fn z_at(k: f32, z_per_bin: f32) -> f32 {
-    if (COSINE_BINS) { return z_of_bin(f, k); }
-    return f.ranges.z + k * z_per_bin;
 }
 
 // Component c of a vector of four words, without a dynamic index (on llvmpipe one that differs

@@ -5,8 +5,8 @@
 // point (closed form below); over a triangle, on its edges unless the axis pierces it. gamma (at
 // the eye, from the axis) only culls, and comes from the triangle's bounding ball: within
 // asin(radius / distance) of its centre's. Every angle here is a bound with a margin, so they
-// come from atan2_approx (common.wgsl, 1.7e-6 rad), which halved Cull at a million triangles on
-// llvmpipe (session 31): the margins below cover it.
+// come from atan2_approx (common.wgsl, 1.7e-6 rad), which took a tenth off Cull at a million
+// triangles on llvmpipe (session 31): the margins below cover it.
 
 // The angle between directions a and b, and phi of direction v (common.wgsl's, from atan2_approx).
 fn bound_angle(a: vec3f, b: vec3f) -> f32 {
