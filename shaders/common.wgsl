@@ -136,7 +136,8 @@ fn angle_between(a: vec3f, b: vec3f) -> f32 {
 }
 
 // atan2(y, x) from a polynomial for atan on [0, 1] and the octants' symmetries: within 1.7e-6 rad
-// (the polynomial's largest error, measured in f64) plus f32's rounding, and 0 at (0, 0). For
+// (the polynomial's largest error, measured in f64) plus f32's rounding for points at least
+// 1e-37 from the origin (tests/shader_math.rs), and 0 at (0, 0). For
 // angles that only bin or bound (Voxelize's hit cells, Cull's ranges, which have margins above
 // it), never for the angles Integrate integrates over. The built-in atan2's range reduction and
 // quadrant logic, which llvmpipe runs in full for a SIMD group, cost a tenth of Cull's time at a
@@ -144,7 +145,7 @@ fn angle_between(a: vec3f, b: vec3f) -> f32 {
 fn atan2_approx(y: f32, x: f32) -> f32 {
     let ax = abs(x);
     let ay = abs(y);
-    let t = min(ax, ay) / max(max(ax, ay), 1e-30);
+    let t = min(ax, ay) / max(max(ax, ay), 1e-37);
     let t2 = t * t;
     var a = t * (0.99997726 + t2 * (-0.33262347 + t2 * (0.19354346 + t2 * (-0.11643287 + t2 * (0.05265332 + t2 * -0.01172120)))));
     a = select(a, 0.5 * PI - a, ay > ax);

@@ -9,19 +9,27 @@ use wgpu::util::DeviceExt;
 
 /// Evaluates `function` of common.wgsl (f32 -> f32) at each of `xs` on the GPU.
 fn eval(function: &str, xs: &[f32]) -> Option<Vec<f32>> {
+    let pairs: Vec<[f32; 2]> = xs.iter().map(|&x| [x, 0.0]).collect();
+    eval_expr(&format!("{function}(p.x)"), &pairs)
+}
+
+/// Evaluates the WGSL expression `expr` of `p` (a vec2f, with common.wgsl imported) at each of
+/// `ps` on the GPU.
+fn eval_expr(expr: &str, ps: &[[f32; 2]]) -> Option<Vec<f32>> {
     // (The shared helper: it skips with the usual message when there is no adapter at all.)
     let r = renderer()?;
     let ctx = &r.ctx;
     // A probe shader beside the embedded ones: a folder holding only it (imports fall back to
     // the embedded common.wgsl).
-    let dir = std::env::temp_dir().join(format!("epivox-shader-math-{}-{function}", std::process::id()));
+    let tag: String = expr.chars().filter(|c| c.is_ascii_alphanumeric()).take(40).collect();
+    let dir = std::env::temp_dir().join(format!("epivox-shader-math-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
     let probe = format!(
         "#import common\n\
-         @group(0) @binding(0) var<storage, read_write> xs: array<f32>;\n\
+         @group(0) @binding(0) var<storage, read_write> xs: array<vec2f>;\n\
          @compute @workgroup_size(64)\n\
          fn main(@builtin(global_invocation_id) id: vec3u) {{\n\
-             if (id.x < arrayLength(&xs)) {{ xs[id.x] = {function}(xs[id.x]); }}\n\
+             if (id.x < arrayLength(&xs)) {{ let p = xs[id.x]; xs[id.x] = vec2f({expr}, 0.0); }}\n\
          }}\n"
     );
     std::fs::write(dir.join("probe.wgsl"), probe).unwrap_or_else(|e| panic!("{e}"));
@@ -37,7 +45,7 @@ fn eval(function: &str, xs: &[f32]) -> Option<Vec<f32>> {
         compilation_options: Default::default(),
         cache: None,
     });
-    let bytes: Vec<u8> = xs.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let bytes: Vec<u8> = ps.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
     let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("shader_math::xs"),
         contents: &bytes,
@@ -54,11 +62,11 @@ fn eval(function: &str, xs: &[f32]) -> Option<Vec<f32>> {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("shader_math"), timestamp_writes: None });
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((xs.len() as u32).div_ceil(64), 1, 1);
+        pass.dispatch_workgroups((ps.len() as u32).div_ceil(64), 1, 1);
     }
     ctx.queue.submit([enc.finish()]);
     let out = ctx.read_buffer(&buffer).unwrap_or_else(|e| panic!("{e}"));
-    Some(out.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    Some(out.chunks_exact(8).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
 }
 
 /// sin_rel keeps a small relative error at both ends of [0, pi], where Integrate divides by it
@@ -92,4 +100,40 @@ fn sin_rel_is_relatively_accurate_near_zero_and_pi() {
         checked_ends += end as usize;
     }
     assert!(checked_ends > 300, "{checked_ends} points near the ends");
+}
+
+/// atan2_approx (common.wgsl) stands for atan2 where an angle only bins or bounds: Voxelize's hit
+/// cells, and Cull's ranges, whose margin for it (`ANGLE_MARGIN` in triangle_bounds.wgsl) is
+/// 4e-6 rad. Its polynomial errs by 1.7e-6 rad at most (f64); on the adapter, over every octant
+/// (4096 directions around the circle, and each octant edge with points 1e-7 and 1e-6 rad either
+/// side of it) and at lengths from 1e-36 to 1e30, it must stay within 2.5e-6 rad of the f64 atan2
+/// of the same f32 point, which leaves the margin room for f32's rounding. At (0, 0) it is 0, as
+/// atan2 is.
+#[test]
+fn atan2_approx_stays_within_its_bound_in_every_octant() {
+    let (pi, tau) = (std::f64::consts::PI, std::f64::consts::TAU);
+    let mut angles: Vec<f64> = (0..4096).map(|i| -pi + tau * (i as f64 + 0.5) / 4096.0).collect();
+    for k in -4..=4 {
+        let edge = std::f64::consts::FRAC_PI_4 * k as f64;
+        angles.extend([-1e-6, -1e-7, 0.0, 1e-7, 1e-6].iter().map(|d| edge + d));
+    }
+    for scale in [1e-36f64, 1e-3, 1.0, 1e3, 1e30] {
+        let points: Vec<[f32; 2]> =
+            angles.iter().map(|a| [(a.sin() * scale) as f32, (a.cos() * scale) as f32]).collect();
+        let Some(got) = eval_expr("atan2_approx(p.x, p.y)", &points) else { return };
+        let (mut worst, mut at) = (0.0f64, 0usize);
+        for (i, (&[y, x], &g)) in points.iter().zip(&got).enumerate() {
+            let want = (y as f64).atan2(x as f64);
+            // Either side of the cut at pi is the same direction.
+            let d = (g as f64 - want).abs();
+            let err = d.min((d - tau).abs());
+            if err > worst {
+                (worst, at) = (err, i);
+            }
+        }
+        let [y, x] = points[at];
+        assert!(worst <= 2.5e-6, "scale {scale:e}: atan2_approx({y:e}, {x:e}) is {worst:e} rad off (bound 2.5e-6)");
+    }
+    let Some(origin) = eval_expr("atan2_approx(p.x, p.y)", &[[0.0, 0.0]]) else { return };
+    assert_eq!(origin[0], 0.0, "atan2_approx(0, 0)");
 }
