@@ -44,7 +44,7 @@ var<private> f: Frame;
 // The grid's axes as scales, set once per thread (main): common.wgsl's ray_coord, bin_coord,
 // z_of_bin and phi_of_plane divide by the axis' span or size, and the walk over bins ran two of
 // those divisions per bin (llvmpipe runs every division of a SIMD group in full; the classroom's
-// Voxelize took 9% less with products, session 31). The same samples to their last bits.
+// Voxelize took 9% less with products, session 31). The samples move by an ulp or two at most.
 struct Scales {
     rays_per_radian: f32, // ray cells per radian of gamma
     bins_per_z: f32,      // bins per unit of z (psi or r; uniform bins)
