@@ -866,6 +866,12 @@ fn lattice_pixels(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_in
     line_setup();
     let p = strip_pixel(strip_of(wg, lid), 0u);
     if (!inside(vec2i(p))) { return; }
+    integrate_and_keep(p);
+}
+
+// Integrates pixel p into the image and keeps its lit sum and visibility in `values`, where its
+// neighbours' classification reads them (pixels 0 and 2).
+fn integrate_and_keep(p: vec2u) {
     let light = integrate_pixel(p);
     textureStore(scatter_out, vec2i(p), scattered(light));
     values[value_index(p)] = vec4f(light.lit, light.vis);
@@ -901,6 +907,10 @@ fn pack(p: vec2u) -> u32 {
     return p.x | (p.y << 16u);
 }
 
+fn unpack(packed: u32) -> vec2u {
+    return vec2u(packed & 0xffffu, packed >> 16u);
+}
+
 // Appends a thread's listed pixels to list `list` (0: `classify_mid`'s, at 0; 1: `classify`'s, at
 // `strips()`). (Appending a workgroup's pixels together, with one atomic per workgroup, measured
 // the same on llvmpipe, session 30: its barriers cost what keeping a refine's lanes on nearby
@@ -920,11 +930,7 @@ fn refine_mid(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups)
     let n = atomicLoad(&refine_count[0]);
     let stride = groups.x * 64u;
     for (var i = id.x; i < n; i += stride) {
-        let packed = refine_list[i];
-        let p = vec2u(packed & 0xffffu, packed >> 16u);
-        let light = integrate_pixel(p);
-        textureStore(scatter_out, vec2i(p), scattered(light));
-        values[value_index(p)] = vec4f(light.lit, light.vis);
+        integrate_and_keep(unpack(refine_list[i]));
     }
 }
 
@@ -965,8 +971,7 @@ fn refine(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) gro
     let base = strips();
     let stride = groups.x * 64u;
     for (var i = id.x; i < n; i += stride) {
-        let packed = refine_list[base + i];
-        let p = vec2u(packed & 0xffffu, packed >> 16u);
+        let p = unpack(refine_list[base + i]);
         textureStore(scatter_out, vec2i(p), scattered(integrate_pixel(p)));
     }
 }
