@@ -10,17 +10,20 @@
 // (l: the path toward the light inside the medium's box; piecewise linear in t, so U is a sum of
 // closed-form pieces built once per pixel; U(z_start) = 0), the lit part is
 //
-//   L = sum_j q_j (C(z_{j+1}) - C(z_j)) = sum_j C(z_j) (q_{j-1} - q_j),   C(z) = U(clamp(z, z_start, z_end)),
+//   L = sum_j q_j (C(z_{j+1}) - C(z_j)) = C(z_end) + sum_j C(z_j) (q_{j-1} - q_j),   C(z) = U(clamp(z, z_start, z_end)),
 //
-// plus the stretches outside the bins' range, which no caster reaches. q_j in [0, 1] is bin j's
-// lit fraction, blended linearly between the two planes around the pixel's angle (hiding the
-// planes) on the pixel's own ray cell, and q_{-1} = q_B = 0. The sum runs only over the bins where
-// q changes: the two rays' shadow boundaries, found with bit operations on four 32-bit words at a
-// time (one vec4u load where the rays start on four words, QUAD_RAYS), so empty and fully shadowed
-// words cost a share of one test and the cost grows with the number of shadow boundaries, not with
-// the bins. (Walking the words one by one, the loop itself was half of the pass on llvmpipe; four
-// at a time took it from ~80 to ~63 ms on the classroom, docs/results.md, session 15.) It sums lit
-// light directly (never "total minus shadowed"), so a fully shadowed ray is exactly 0.
+// over the bins and the stretches before and after them, which no caster reaches (q_{-1} = q_B =
+// 1). q_j in [0, 1] is bin j's lit fraction, blended linearly between the two planes around the
+// pixel's angle (hiding the planes) on the pixel's own ray cell. Where the ray is shadowed at
+// z_end, C(z_end) cancels with the boundaries past it (all at C(z_end)); so the sum takes the
+// boundaries below z_end, and C(z_end) only where the ray is lit there. The sum runs only over
+// the bins where q changes: the two rays' shadow boundaries, found with bit operations on four
+// 32-bit words at a time (one vec4u load where the rays start on four words, QUAD_RAYS), so empty
+// and fully shadowed words cost a share of one test and the cost grows with the number of shadow
+// boundaries, not with the bins. (Walking the words one by one, the loop itself was half of the
+// pass on llvmpipe; four at a time took it from ~80 to ~63 ms on the classroom, docs/results.md,
+// session 15.) Every term is a lit run's start or end: it sums lit light directly (never "total
+// minus shadowed"), so a fully shadowed ray is exactly 0.
 //
 // By default not every pixel is integrated: along an epipolar line a pixel whose two neighbours
 // on the line agree takes their mean ("pixels from their neighbours", below).
@@ -219,31 +222,38 @@ fn cumulative(r: Ray, z: f32) -> vec3f {
     return along(zc * r.t_per_z);
 }
 
-// sum_j C(z_j) (q_{j-1} - q_j) over one plane's grid ray at `base`, q_j = 1 where bin j is lit
-// (the caller weights the plane); bin j of the plane spans [z(j + offset), z(j + 1 + offset)]
-// around its sample (bin_offset), the first and the last extended to z(-1/4) and z(B + 1/4).
-// `ends` holds C(z_end) and C(z(B + 1/4)), computed once per pixel by the caller.
-fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
+// The lit part of the view ray on one plane's grid ray at `base` (the caller weights the plane):
+// sum_j C(z_j) (q_{j-1} - q_j), q_j = 1 where bin j is lit, summed over the bins where q changes,
+// and C(z_end) where the ray is still lit at z_end. Outside the bins' range the ray is lit (no
+// caster reaches there): q = 1 before the first bin and after the last. Bin j of the plane spans
+// [z(j + offset), z(j + 1 + offset)] around its sample (bin_offset), the first and the last
+// extended to z(-1/4) and z(B + 1/4). Every term is a lit run's end or start: the lit light is
+// summed directly, never "total minus shadowed", so a ray shadowed all along is exactly 0, and
+// one lit all along is exactly C(z_end) with no boundary walked: one pass over the words, with no
+// test for an all-lit ray ahead of it (which read every word twice, session 32).
+fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, c_end: vec3f) -> vec3f {
     var sum = vec3f(0.0);
-    // q before the first bin is 0 (the stretch below the bins is added apart), which the bits see
-    // as a set bit before bin 0: carry starts at 1.
-    var carry = 1u;
-    let first = u32(clamp(floor(bin_coord(f, r.z_start) - offset), 0.0, f32(f.grid.z - 1u))) / 32u;
-    if (first > 0u) {
-        // Every boundary before z_start has C = U(z_start) = 0: start from the previous word's last bit.
-        carry = word(base + first - 1u) >> 31u;
-    }
-    // Words past `last` hold bins beyond z_end only: the end term below covers them.
+    // The boundaries at or below z_start (C = U(z_start) = 0) are skipped: n of them, bin j's at
+    // z(j + offset) and bin 0's at z(-1/4) (below). carry is the bit before boundary n (a clear
+    // bit before bin 0: lit), read where n starts a word (within a word the shift below sees it).
+    let bc = bin_coord(f, r.z_start);
+    let n = select(0u, 1u + u32(clamp(floor(bc - offset), 0.0, f32(f.grid.z - 1u))), bc >= -0.25);
+    let first = n / 32u;
+    var carry = 0u;
+    if (n > 0u && n % 32u == 0u) { carry = word(base + first - 1u) >> 31u; }
+    let skipped = ~0u << (n % 32u);
+    // Words past `last` hold bins beyond z_end only: the ray's state at z_end is the last walked bit.
     let lanes = vec4u(0u, 1u, 2u, 3u);
     let z_per_bin = (f.ranges.w - f.ranges.z) / f32(f.grid.z);
     for (var g = first / 4u; g <= last / 4u; g++) {
         let q = quad(base, g);
         let w = vec4u(g * 4u) + lanes;
         // Where the bit differs from the one before it (bit 0 against the previous word's last),
-        // in the words first..last only.
+        // in the words first..last only, from boundary n on.
         let before = vec4u(carry, q.x >> 31u, q.y >> 31u, q.z >> 31u);
         let inside = w >= vec4u(first) & w <= vec4u(last);
-        var changes = (q ^ ((q << vec4u(1u)) | before)) & select(vec4u(0u), vec4u(~0u), inside);
+        let from_n = select(vec4u(~0u), vec4u(skipped), w == vec4u(first));
+        var changes = (q ^ ((q << vec4u(1u)) | before)) & select(vec4u(0u), from_n, inside);
         // The carry into the next group, or past the loop: bit 31 of word `last` in the last group
         // (unchanged when there is no word to walk).
         carry = select(carry, pick(q, min(last - g * 4u, 3u)) >> 31u, first <= last);
@@ -260,16 +270,20 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, ends: Ends) -> vec3f {
             // A lit bin begins (q: 0 -> 1) where the bit is clear, a shadowed one where it is set.
             let lit_after = ((pick(q, c) >> i) & 1u) == 0u;
             if (z >= r.z_end) {
-                // Every later boundary sits at z_end: the rest telescopes to C(z_end) times q
-                // before this boundary (1 where it starts a shadow).
-                return sum + select(vec3f(0.0), ends.z_end, !lit_after);
+                // The ray ends in the run before this boundary: lit up to z_end where this
+                // boundary starts a shadow (every later boundary sits at z_end and cancels).
+                return sum + select(vec3f(0.0), c_end, !lit_after);
             }
             let cz = cumulative(r, z);
             sum += select(cz, -cz, lit_after);
         }
     }
-    // The boundary after the last bin (C clamps it to z_end when the ray ends first).
-    return sum + select(vec3f(0.0), ends.z_hi, carry == 0u);
+    // Lit at z_end: the last run reaches it.
+    if (carry == 0u) { return sum + c_end; }
+    // Shadowed to the last bin's end, and lit from there where the ray goes on past it.
+    let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
+    if (r.z_end > z_hi) { sum += c_end - cumulative(r, z_hi); }
+    return sum;
 }
 
 // Component c of a vector of four words, without a dynamic index (on llvmpipe one that differs
@@ -291,38 +305,14 @@ fn quad(base: u32, g: u32) -> vec4u {
     return vec4u(word(i), word(i + 1u), word(i + 2u), word(i + 3u));
 }
 
-// C at the end of the view ray and at the end of the bins' range.
-struct Ends {
-    z_end: vec3f,
-    z_hi: vec3f,
-}
-
-// The lit part of the view ray: the stretches before and after the bins' range (no caster reaches
-// them), and both planes around the pixel, on the pixel's own ray cell.
+// The lit part of the view ray: both planes around the pixel, on the pixel's own ray cell.
 fn lit(r: Ray, x: vec2u, bases: vec2u, weights: vec2f) -> vec3f {
-    // The words holding bins of [z_start, z_end] on either plane (offsets of -1/4 and +1/4 bin).
-    let top = f32(f.grid.z - 1u);
-    let first = u32(clamp(floor(bin_coord(f, r.z_start) - 0.25), 0.0, top)) / 32u;
-    let last = u32(clamp(floor(bin_coord(f, r.z_end) + 0.25), 0.0, top)) / 32u;
-    // Most rays cross no shadow at all: when no bit is set there, the whole ray is lit.
-    var any = 0u;
-    for (var g = first / 4u; g <= last / 4u; g++) {
-        let w = vec4u(g * 4u) + vec4u(0u, 1u, 2u, 3u);
-        let inside = w >= vec4u(first) & w <= vec4u(last);
-        let q = (quad(bases.x, g) | quad(bases.y, g)) & select(vec4u(0u), vec4u(~0u), inside);
-        any |= q.x | q.y | q.z | q.w;
-    }
+    // The last word holding bins of [z_start, z_end] on either plane (offsets of -1/4 and +1/4 bin).
+    let last = u32(clamp(floor(bin_coord(f, r.z_end) + 0.25), 0.0, f32(f.grid.z - 1u))) / 32u;
     let c_end = cumulative(r, r.z_end);
-    if (any == 0u) { return c_end; }
     var sum = vec3f(0.0);
-    // Both planes' bins span [z(-1/4), z(B + 1/4)] (lit_plane).
-    let z_lo = z_of_bin(f, -0.25);
-    let z_hi = z_of_bin(f, f32(f.grid.z) + 0.25);
-    let ends = Ends(c_end, cumulative(r, z_hi));
-    if (r.z_start < z_lo) { sum += cumulative(r, z_lo); }
-    if (r.z_end > z_hi) { sum += ends.z_end - ends.z_hi; }
-    if (weights.x > 0.0) { sum += weights.x * lit_plane(r, bases.x, bin_offset(x.x), last, ends); }
-    if (weights.y > 0.0) { sum += weights.y * lit_plane(r, bases.y, bin_offset(x.y), last, ends); }
+    if (weights.x > 0.0) { sum += weights.x * lit_plane(r, bases.x, bin_offset(x.x), last, c_end); }
+    if (weights.y > 0.0) { sum += weights.y * lit_plane(r, bases.y, bin_offset(x.y), last, c_end); }
     return sum;
 }
 
