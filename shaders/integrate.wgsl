@@ -103,6 +103,8 @@ struct Pieces {
     cum1: vec3f,
     cum2: vec3f,
     cum3: vec3f,
+    // GREY_MEDIUM: exp(-sigma_t g) at each piece's start (piece_integral_grey).
+    e: vec4f,
     count: u32,
 }
 
@@ -120,6 +122,23 @@ fn piece_integral(start: f32, g: f32, k: f32, t: f32) -> vec3f {
     }
     let sigma_t = f.sigma_t.xyz;
     return exp(-sigma_t * g_min) * len * one_minus_exp_over_x(sigma_t * (abs(k) * len));
+}
+
+// piece_integral in a grey medium from exp(-sigma_t g) at the piece's start (e_start, made once per
+// piece): one exponential per call, at t, instead of two. With e_lo and e_hi the exponential at
+// the smaller and the larger exponent (g_min, g_min + |k| len),
+//   integral = e_lo len E(x) = (e_lo - e_hi) / (sigma_t |k|),   x = sigma_t |k| len,
+// the difference where x >= 1/2 (e_hi <= 0.61 e_lo: no cancellation), E's series below.
+fn piece_integral_grey(start: f32, g: f32, k: f32, e_start: f32, t: f32) -> f32 {
+    let s = f.sigma_t.x;
+    let len = max(t - start, 0.0);
+    let x = s * (abs(k) * len);
+    let e_t = exp(-s * max(0.0, g + k * len));
+    let e_lo = select(e_start, e_t, k < 0.0);
+    let e_hi = select(e_t, e_start, k < 0.0);
+    let series = e_lo * len * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0)))))));
+    let direct = (e_lo - e_hi) / max(s * abs(k), 1e-30);
+    return select(direct, series, x < 0.5);
 }
 
 // A breakpoint of the minimum of exits i and j (alpha + beta t) when it lies inside (t_in, t_end);
@@ -170,9 +189,17 @@ fn build_pieces(v: vec3f, t_in: f32, t_end: f32) {
     pieces.g = vec4f(q0.x, q1.x, q2.x, q3.x);
     pieces.k = vec4f(q0.y, q1.y, q2.y, q3.y);
     pieces.cum0 = vec3f(0.0);
-    pieces.cum1 = piece_integral(start.x, q0.x, q0.y, end.x);
-    pieces.cum2 = pieces.cum1 + piece_integral(start.y, q1.x, q1.y, end.y);
-    pieces.cum3 = pieces.cum2 + piece_integral(start.z, q2.x, q2.y, end.z);
+    if (GREY_MEDIUM) {
+        let e = exp(-f.sigma_t.x * max(vec4f(0.0), pieces.g));
+        pieces.e = e;
+        pieces.cum1 = vec3f(piece_integral_grey(start.x, q0.x, q0.y, e.x, end.x));
+        pieces.cum2 = pieces.cum1 + piece_integral_grey(start.y, q1.x, q1.y, e.y, end.y);
+        pieces.cum3 = pieces.cum2 + piece_integral_grey(start.z, q2.x, q2.y, e.z, end.z);
+    } else {
+        pieces.cum1 = piece_integral(start.x, q0.x, q0.y, end.x);
+        pieces.cum2 = pieces.cum1 + piece_integral(start.y, q1.x, q1.y, end.y);
+        pieces.cum3 = pieces.cum2 + piece_integral(start.z, q2.x, q2.y, end.z);
+    }
     pieces.count = n;
 }
 
@@ -181,25 +208,30 @@ fn along(t: f32) -> vec3f {
     var start = pieces.start.x;
     var g = pieces.g.x;
     var k = pieces.k.x;
+    var e = pieces.e.x;
     var cum = pieces.cum0;
     if (pieces.count > 1u && t >= pieces.start.y) {
         start = pieces.start.y;
         g = pieces.g.y;
         k = pieces.k.y;
+        e = pieces.e.y;
         cum = pieces.cum1;
     }
     if (pieces.count > 2u && t >= pieces.start.z) {
         start = pieces.start.z;
         g = pieces.g.z;
         k = pieces.k.z;
+        e = pieces.e.z;
         cum = pieces.cum2;
     }
     if (pieces.count > 3u && t >= pieces.start.w) {
         start = pieces.start.w;
         g = pieces.g.w;
         k = pieces.k.w;
+        e = pieces.e.w;
         cum = pieces.cum3;
     }
+    if (GREY_MEDIUM) { return cum + piece_integral_grey(start, g, k, e, t); }
     return cum + piece_integral(start, g, k, t);
 }
 
