@@ -136,7 +136,7 @@ fn piece_integral_grey(start: f32, g: f32, k: f32, e_start: f32, t: f32) -> f32 
     let e_t = exp(-s * max(0.0, g + k * len));
     let e_lo = select(e_start, e_t, k < 0.0);
     let e_hi = select(e_t, e_start, k < 0.0);
-    let series = e_lo * len * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0)))))));
+    let series = e_lo * len * one_minus_exp_over_x_series1(x);
     let direct = (e_lo - e_hi) / max(s * abs(k), 1e-30);
     return select(direct, series, x < 0.5);
 }

@@ -6,7 +6,8 @@
 //! - `phase`, `phase_of_angle`, `one_minus_exp_over_x` of `shaders/common.wgsl`;
 //! - `integrand` and the per-row cumulative table of `shaders/scatter_table.wgsl`, and `table_g` /
 //!   the point-light weight `(pi - gamma) / h` of `shaders/integrate.wgsl`;
-//! - `box_integral` of `shaders/integrate.wgsl` (directional light in the medium's box).
+//! - the pieces of `shaders/integrate.wgsl` (`build_pieces`, `piece_integral_grey`: a directional
+//!   light in the medium's box).
 //!
 //! [`f32m`] and [`f64m`] are generated from one macro, so they are the same formulas; the property
 //! tests in `tests/proptest_integrals.rs` compare `f32m` with `f64m` (rounding alone) and with the
@@ -191,9 +192,10 @@ macro_rules! formulas {
                 }
             }
 
-            /// `box_integral` of integrate.wgsl for one channel: `integral_a^b exp(-sigma_t (l(t) + t -
-            /// t_in)) dt` along `e + t v`, with `l` the distance toward the light `w` to the box
-            /// `[lo, hi]`.
+            /// The pieces of integrate.wgsl (`build_pieces`, `piece_integral_grey`) for one channel:
+            /// `integral_a^b exp(-sigma_t (l(t) + t - t_in)) dt` along `e + t v`, with `l` the
+            /// distance toward the light `w` to the box `[lo, hi]`. (A coloured medium's
+            /// `piece_integral` takes `exp(-sigma_t g_min) len E(x)` per channel, the same value.)
             #[allow(clippy::too_many_arguments)]
             pub fn box_integral(
                 e: [$F; 3],
@@ -251,9 +253,17 @@ macro_rules! formulas {
                     }
                     let g0 = (alpha[k] + beta[k] * p0).max(0.0) + p0 - t_in;
                     let g1 = (alpha[k] + beta[k] * p1).max(0.0) + p1 - t_in;
-                    let gmin = g0.min(g1).max(0.0);
+                    // piece_integral_grey: the exponential at both ends of the exponent, their
+                    // difference over sigma_t |k| where x >= 1/2, E's series below.
+                    let e_lo = (-sigma_t * g0.min(g1).max(0.0)).exp();
+                    let e_hi = (-sigma_t * g0.max(g1).max(0.0)).exp();
                     let x = sigma_t * (g1 - g0).abs();
-                    sum += (-sigma_t * gmin).exp() * (p1 - p0) * one_minus_exp_over_x(x);
+                    let len = p1 - p0;
+                    sum += if x < 0.5 {
+                        e_lo * len * one_minus_exp_over_x(x)
+                    } else {
+                        (e_lo - e_hi) / (sigma_t * ((g1 - g0) / len).abs()).max(1e-30)
+                    };
                 }
                 sum
             }
