@@ -361,14 +361,8 @@ fn one_minus_exp_over_x(x: vec3f) -> vec3f {
     return select(direct, series, abs(x) < vec3f(0.5));
 }
 
-// The same for one channel (a grey medium).
-fn one_minus_exp_over_x1(x: f32) -> f32 {
-    let direct = (1.0 - exp(-x)) / max(x, 1e-30);
-    return select(direct, one_minus_exp_over_x_series1(x), abs(x) < 0.5);
-}
-
-// Its series alone, for |x| < 1/2 (integrate.wgsl's piece_integral_grey takes the other side
-// without an exponential of its own).
+// Its series alone for one channel, for |x| < 1/2 (a grey medium: integrate.wgsl's
+// piece_integral_grey, which takes the other side without an exponential of its own).
 fn one_minus_exp_over_x_series1(x: f32) -> f32 {
     return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x * (1.0 / 720.0 - x * (1.0 / 5040.0))))));
 }

@@ -110,16 +110,12 @@ struct Pieces {
 
 var<private> pieces: Pieces;
 
-// The integral over the piece starting at `start` (exponent g there, slope k) up to t. Every
-// shadow boundary of every pixel evaluates this; in a grey medium (GREY_MEDIUM, a pipeline
-// constant) one channel's exponentials stand for all three, the same values to the bit.
+// The integral over the piece starting at `start` (exponent g there, slope k) up to t, per
+// channel. Every shadow boundary of every pixel evaluates it; a grey medium (GREY_MEDIUM, a
+// pipeline constant) takes piece_integral_grey instead, one channel's exponential for all three.
 fn piece_integral(start: f32, g: f32, k: f32, t: f32) -> vec3f {
     let len = max(t - start, 0.0);
     let g_min = max(0.0, g + min(k, 0.0) * len);
-    if (GREY_MEDIUM) {
-        let s = f.sigma_t.x;
-        return vec3f(exp(-s * g_min) * len * one_minus_exp_over_x1(s * (abs(k) * len)));
-    }
     let sigma_t = f.sigma_t.xyz;
     return exp(-sigma_t * g_min) * len * one_minus_exp_over_x(sigma_t * (abs(k) * len));
 }

@@ -404,7 +404,6 @@ fn hit_cell(s: InPlane, k: i32) -> i32 {
     return ray_cell(atan2_approx(q.y, q.x));
 }
 
-
 // Sets bins ks.x..ks.y of ray cell y in plane x: one atomic OR per word.
 fn fill(x: u32, ks: vec2u, y: i32) {
     if (y < 0) { return; }
