@@ -21,6 +21,9 @@
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read_write> grid: array<vec4u>;
+// Per plane, the ray cells [first, end) the frame's pixels can read (GridMapping::plane_rays):
+// Voxelize put every caster before `first` into it, so the scan starts there and stops at `end`.
+@group(0) @binding(2) var<storage, read> plane_rays: array<vec2u>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -33,9 +36,11 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     let column = id.x;
     let quads = words / 4u;
     if (column >= f.grid.x * quads) { return; }
-    let start = ray_offset(f, column / quads, 0u) / 4u + column % quads;
+    let plane = column / quads;
+    let start = ray_offset(f, plane, 0u) / 4u + column % quads;
+    let cells = plane_rays[plane];
     var acc = vec4u(0u);
-    for (var y = 0u; y < f.grid.y; y++) {
+    for (var y = cells.x; y < cells.y; y++) {
         let i = start + y * quads;
         if (any(acc != vec4u(0xffffffffu))) { acc |= grid[i]; }
         grid[i] = acc;

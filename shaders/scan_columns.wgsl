@@ -23,6 +23,8 @@
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read_write> grid: array<vec4u>;
+// Per plane, the ray cells [first, end) the frame's pixels can read (scan.wgsl).
+@group(0) @binding(2) var<storage, read> plane_rays: array<vec2u>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -39,16 +41,18 @@ fn main(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) t: u3
     if (plane >= f.grid.x) { return; }
     let quads = f.grid.w / 4u;
     let base = ray_offset(f, plane, 0u) / 4u;
-    let rays = f.grid.y;
+    // The plane's cells [first, end) (uniform across the workgroup).
+    let cells = plane_rays[plane];
+    let rays = cells.y - min(cells.x, cells.y);
     let count = THREADS / quads;
     let run = t / quads;
     let q = t % quads;
     // The threads past the last whole run (THREADS not a multiple of quads) take no rays.
     let busy = run < count;
     let per = (rays + count - 1u) / count;
-    var y0 = rays;
-    if (busy) { y0 = min(run * per, rays); }
-    let y1 = min(y0 + per, rays);
+    var y0 = cells.y;
+    if (busy) { y0 = cells.x + min(run * per, rays); }
+    let y1 = min(y0 + per, cells.y);
     var acc = vec4u(0u);
     for (var y = y0; y < y1; y++) {
         acc |= grid[base + y * quads + q];

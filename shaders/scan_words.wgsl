@@ -17,6 +17,8 @@
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read_write> grid: array<u32>;
+// Per plane, the ray cells [first, end) the frame's pixels can read (scan.wgsl).
+@group(0) @binding(2) var<storage, read> plane_rays: array<vec2u>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -27,16 +29,16 @@ const GROUP: u32 = 4u;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u) {
     f = frame_in;
-    let rays = f.grid.y;
     let words = f.grid.w;
     let groups = (words + GROUP - 1u) / GROUP;
     let column = id.x; // plane * groups + group
     if (column >= f.grid.x * groups) { return; }
     let w0 = (column % groups) * GROUP;
     let base = ray_offset(f, column / groups, 0u) + w0;
+    let cells = plane_rays[column / groups];
     if (w0 + GROUP <= words) {
         var acc = vec4u(0u);
-        for (var y = 0u; y < rays; y++) {
+        for (var y = cells.x; y < cells.y; y++) {
             let i = base + y * words;
             acc |= vec4u(grid[i], grid[i + 1u], grid[i + 2u], grid[i + 3u]);
             grid[i] = acc.x;
@@ -49,7 +51,7 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
     // The last group of a ray whose words are not a multiple of four.
     for (var w = 0u; w0 + w < words; w++) {
         var acc = 0u;
-        for (var y = 0u; y < rays; y++) {
+        for (var y = cells.x; y < cells.y; y++) {
             let i = base + w + y * words;
             acc |= grid[i];
             grid[i] = acc;

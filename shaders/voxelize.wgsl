@@ -37,6 +37,9 @@
 @group(0) @binding(4) var<storage, read> offsets: array<u32>;
 @group(0) @binding(5) var<storage, read> blocks: array<u32>;
 @group(0) @binding(6) var<storage, read> counters: array<u32, 12>;
+// Per plane, the ray cells [first, end) the frame's pixels can read (GridMapping::plane_rays): no
+// hit past them is set, and the casters before them go to `first`, which the scan carries forward.
+@group(0) @binding(7) var<storage, read> plane_rays: array<vec2u>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -161,12 +164,16 @@ fn crosses(da: f32, db: f32) -> bool {
 
 // ---- per item --------------------------------------------------------------------------------
 
-// The ray cell of gamma: -1 past the last visible ray (no visible point lies behind such a hit);
-// casters before the first visible ray go to cell 0, which the scan carries forward.
+// The item's plane's cells that pixels read, [first, end) (plane_rays), as floats.
+var<private> cells: vec2f;
+
+// The ray cell of gamma: -1 past the last ray the plane's pixels read (no pixel's light ray meets
+// such a hit before its view ray); casters before the first such ray go to that ray's cell, which
+// the scan carries forward (an empty plane, end 0, takes none).
 fn ray_cell(gamma: f32) -> i32 {
-    let y = floor((gamma - f.ranges.x) * scale.rays_per_radian);
-    if (y >= f32(f.grid.y)) { return -1; }
-    return i32(max(y, 0.0));
+    let y = max(floor((gamma - f.ranges.x) * scale.rays_per_radian), cells.x);
+    if (y >= cells.y) { return -1; }
+    return i32(y);
 }
 
 fn cartesian_cell(q: vec3f) -> i32 {
@@ -283,6 +290,7 @@ fn voxelize_item(rec: vec4u, plane: u32, group: u32, p: Tri) {
     let w = vec2u(first, min(first + per, (rec.w & 0xffffu) + words) - 1u);
     var x = rec.y + plane;
     if (x >= f.grid.x) { x -= f.grid.x; } // wraps only when the planes cover the full circle
+    cells = vec2f(plane_rays[x]);
     run_cell = -1;
     run_word = 0xffffffffu;
     run_mask = 0u;

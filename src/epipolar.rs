@@ -306,6 +306,102 @@ impl GridMapping {
     }
 }
 
+/// Planes either side of a pixel's plane coordinate whose rays it may read: Integrate blends the
+/// two planes around it and the grid's surface shadows a tent over four (integrate.wgsl), so plane
+/// x serves the pixels whose coordinate lies in [x - 1.5, x + 2.5); one more for safety.
+pub const PLANE_RAYS_PLANE_MARGIN: f64 = 2.5;
+/// Ray cells kept below the lowest and above the highest cell a plane's pixels lie in, on top of
+/// the rays' pad: room for the GPU's f32 angles against these f64 ones.
+pub const PLANE_RAYS_CELL_MARGIN: u32 = 4;
+
+impl GridMapping {
+    /// Per plane, the ray cells `[first, end)` that the frame's pixels can read
+    /// (`PlaneRays`, shaders/common.wgsl): Voxelize sets no bit past `end` and clamps every
+    /// caster below `first` into `first`, and Scan walks only those cells. The prefix-OR then
+    /// gives every cell in `[first, end)` the same bits as the whole grid would, so the image is
+    /// the same to the bit, while rays that no pixel reads cost neither atomics nor the scan.
+    ///
+    /// The pixels of the `width x height` image lie inside its border, so the gamma range of plane
+    /// x is the range of the border's directions whose plane coordinate lies within
+    /// [`PLANE_RAYS_PLANE_MARGIN`] of it (along an epipolar line gamma is monotonic, so its
+    /// extremes lie where the line crosses the border), down to 0 when the light's point is on
+    /// screen and up to pi when the opposite point is. The border is cut into short segments and
+    /// each segment's gamma range goes to every plane its coordinates reach; the rays' global pad
+    /// and [`PLANE_RAYS_CELL_MARGIN`] cells go on top. Planes no pixel reads get `[0, 0)`.
+    pub fn plane_rays(&self, frame: &EpipolarFrame, camera: &Camera, aspect: f64) -> Vec<[u32; 2]> {
+        let planes = self.grid.planes as usize;
+        let rays = self.grid.rays;
+        let [r, u, f] = camera.basis_f64();
+        let (r, u, f) = (DVec3::from(r), DVec3::from(u), DVec3::from(f));
+        let th = ((camera.fov_y_deg as f64).to_radians() * 0.5).tan();
+        let tw = th * aspect;
+        let on_screen = |d: DVec3| {
+            let z = d.dot(f);
+            z > 0.0 && (d.dot(r) / z).abs() <= tw && (d.dot(u) / z).abs() <= th
+        };
+        let epipole_on = on_screen(frame.axis);
+        let anti_on = on_screen(-frame.axis);
+        let mut lo = vec![f64::INFINITY; planes];
+        let mut hi = vec![f64::NEG_INFINITY; planes];
+        // Two samples per plane along each side: a segment's gamma between its ends strays from
+        // them by ~(its angle)^2, far below the pad.
+        let n = (2 * planes).max(256);
+        let sample = |i: usize| {
+            let s = (i % n) as f64 / n as f64 * 2.0 - 1.0;
+            let (x, y) = match i / n {
+                0 => (s, -1.0),
+                1 => (1.0, s),
+                2 => (-s, 1.0),
+                _ => (-1.0, -s),
+            };
+            let d = (f + r * (x * tw) + u * (y * th)).normalize();
+            (self.plane_coord(frame.phi_of_dir(d)), angle_between(frame.axis, d))
+        };
+        let p = planes as f64;
+        let mut spread = |ca: f64, cb: f64, g0: f64, g1: f64| {
+            let (a, b) = (ca.min(cb) - PLANE_RAYS_PLANE_MARGIN, ca.max(cb) + PLANE_RAYS_PLANE_MARGIN);
+            let mut x = a.floor();
+            while x <= b {
+                let i = if self.phi_wraps {
+                    Some(x.rem_euclid(p) as usize)
+                } else {
+                    (x >= 0.0 && x < p).then_some(x as usize)
+                };
+                if let Some(i) = i.filter(|&i| i < planes) {
+                    lo[i] = lo[i].min(g0.min(g1));
+                    hi[i] = hi[i].max(g0.max(g1));
+                }
+                x += 1.0;
+            }
+        };
+        let mut prev = sample(0);
+        for i in 1..=4 * n {
+            let next = sample(i % (4 * n));
+            let (mut ca, cb) = (prev.0, next.0);
+            // Across the seam of a full circle: the shorter way round.
+            if self.phi_wraps && (cb - ca).abs() > p / 2.0 {
+                ca += if cb > ca { p } else { -p };
+            }
+            spread(ca, cb, prev.1, next.1);
+            prev = next;
+        }
+        let pad = (self.gamma_hi - self.gamma_lo) * 0.005 + 1e-9;
+        let m = PLANE_RAYS_CELL_MARGIN as f64;
+        (0..planes)
+            .map(|i| {
+                if lo[i] > hi[i] {
+                    return [0, 0];
+                }
+                let g_lo = if epipole_on { 0.0 } else { lo[i] - pad };
+                let g_hi = if anti_on { PI } else { hi[i] + pad };
+                let first = (self.ray_coord(g_lo).floor() - m).clamp(0.0, rays as f64);
+                let end = (self.ray_coord(g_hi).floor() + 1.0 + m).clamp(0.0, rays as f64);
+                [first as u32, (end as u32).max(first as u32)]
+            })
+            .collect()
+    }
+}
+
 /// The `z` range that casters inside `b` can occupy, from its bounding sphere (conservative).
 pub fn caster_z_range(frame: &EpipolarFrame, b: &Aabb) -> (f64, f64) {
     if b.is_empty() {
@@ -475,6 +571,45 @@ mod tests {
                 assert!((m.bin_coord(m.z_of_bin(k)) - k).abs() < 1e-6, "{name}: bin round trip");
             }
         }
+    }
+
+    /// Every ray cell a pixel reads lies inside its planes' `plane_rays`, with margin: the cell
+    /// itself and two either side, on the four planes around the pixel (Integrate's two and one
+    /// more on either side), for each frame of `frames`, at
+    /// two aspect ratios. And the ranges prune something: the test would pass with every cell
+    /// kept, so it also checks that some frame keeps under 90% of them.
+    #[test]
+    fn plane_rays_hold_every_cell_a_pixel_reads() {
+        let cam = camera();
+        let casters = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
+        let grid = Grid { planes: 384, rays: 256, bins: 64, ..Grid::default() };
+        let mut least_kept = 1.0f64;
+        for (w, h) in [(96u32, 64u32), (40, 72)] {
+            for (name, f) in frames() {
+                let m = GridMapping::fit(&f, &cam, w as f64 / h as f64, &casters, grid);
+                let cells = m.plane_rays(&f, &cam, w as f64 / h as f64);
+                assert_eq!(cells.len(), grid.planes as usize);
+                let kept: u32 = cells.iter().map(|c| c[1] - c[0]).sum();
+                least_kept = least_kept.min(kept as f64 / (grid.planes * grid.rays) as f64);
+                let p = grid.planes as i64;
+                for py in 0..h {
+                    for px in 0..w {
+                        let d = cam.pixel_dir_f64(px as f64, py as f64, w, h);
+                        let x0 = (m.plane_coord(f.phi_of_dir(d)) - 0.5).floor() as i64;
+                        let y = m.ray_coord(angle_between(f.axis, d)).floor().clamp(0.0, grid.rays as f64 - 1.0) as u32;
+                        for x in x0 - 1..=x0 + 2 {
+                            let x = if m.phi_wraps { x.rem_euclid(p) } else { x.clamp(0, p - 1) } as usize;
+                            let [first, end] = cells[x];
+                            assert!(
+                                first <= y.saturating_sub(2) && (y + 2 < end || end == grid.rays),
+                                "{name} at {w}x{h}: pixel ({px},{py}) reads cell {y} of plane {x}, which keeps {first}..{end}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(least_kept < 0.9, "no frame pruned a tenth of the cells: {least_kept}");
     }
 
     #[test]

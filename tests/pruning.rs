@@ -157,3 +157,55 @@ fn each_light_and_phase_runs_its_own_specialised_pipelines() {
     let report = r.prune_report(&again.info()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(report.variant, "point light, henyey-greenstein");
 }
+
+/// Keeping only the ray cells each plane's pixels read (`Renderer::prune_plane_rays`) changes no
+/// pixel: Voxelize folds the casters before a plane's first kept cell into it and drops the hits
+/// past its last, so the scan gives every kept cell the bits of the whole grid. Checked bit for
+/// bit on the scattered light and the final image, with the light on screen (the planes wrap),
+/// behind the camera (its opposite point on screen), far off screen and as a sun over the
+/// built-in room. And it keeps fewer cells: otherwise the test could not fail. Frames with the
+/// grid's surface shadows, which read cells around each surface point's reach, keep every cell
+/// (a point light inside a closed box leaked onto the floor when they did not:
+/// `tests/gpu.rs::surface_shadows_from_the_grid_never_leak_out_of_a_closed_box`).
+#[test]
+fn pruned_plane_rays_change_no_pixel() {
+    let Some(mut r) = renderer() else { return };
+    let mut on_screen = base(point_light(Vec3::new(0.3, 2.6, -1.0)));
+    on_screen.camera.target = Vec3::new(0.0, 1.8, 0.0);
+    let mut room = epivox::scene::builtin_scene();
+    room.grid = Grid { planes: 384, rays: 256, bins: 128, ..Grid::default() };
+    let scenes = [
+        ("light on screen", on_screen),
+        ("light behind the camera", base(point_light(Vec3::new(1.0, 3.0, 9.0)))),
+        ("light far off screen", base(point_light(Vec3::new(12.0, 3.0, 0.5)))),
+        ("the built-in room's sun", room),
+    ];
+    let mut least_kept = 1.0f64;
+    for (name, s) in &scenes {
+        for grid_shadows in [false, true] {
+            r.grid_shadows = grid_shadows;
+            let mut images = Vec::new();
+            for pruned in [true, false] {
+                r.prune_plane_rays = pruned;
+                let out = r.render(s, 80, 64, Method::Vsv).unwrap_or_else(|e| panic!("{name}: {e}"));
+                let report = r.prune_report(&out.info()).unwrap_or_else(|e| panic!("{e}"));
+                if pruned && !grid_shadows {
+                    least_kept = least_kept.min(report.plane_ray_cells);
+                } else {
+                    assert_eq!(
+                        report.plane_ray_cells, 1.0,
+                        "{name}: cells were left out (grid shadows: {grid_shadows})"
+                    );
+                }
+                images.push((out.scatter, out.hdr));
+            }
+            let what = format!("{name} ({} surface shadows)", if grid_shadows { "grid" } else { "map" });
+            assert!(images[0].0.pixels.iter().any(|p| p[0] > 0.0), "{what}: nothing scatters");
+            assert!(images[0].0.pixels == images[1].0.pixels, "{what}: the scattered light changed");
+            assert!(images[0].1.pixels == images[1].1.pixels, "{what}: the final image changed");
+        }
+    }
+    r.grid_shadows = false;
+    r.prune_plane_rays = true;
+    assert!(least_kept < 0.8, "no scene left out a fifth of the cells ({least_kept})");
+}

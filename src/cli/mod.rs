@@ -614,7 +614,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             if let Some(p) = &pruned_z {
                 println!(
                     "work kept{}: planes over {:.1} of 360 deg, rays gamma {:.1}..{:.1} deg, bins z {:.4}..{:.4} (casters {:.4}..{:.4}), \
-                     {} words/ray, triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth, {} solids' faces away from the light, \
+                     {} words/ray, {:.1}% of the plane x ray cells (those the pixels read), triangles {} of {} (dropped: {} outside the view, {} beyond the visible depth, {} solids' faces away from the light, \
                      {} hidden from the light), passes: {}, \
                      shaders specialised to a {}",
                     if p.enabled { "" } else { " (--no-prune)" },
@@ -626,6 +626,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
                     p.bins_z_casters[0],
                     p.bins_z_casters[1],
                     p.words_per_ray,
+                    p.plane_ray_cells * 100.0,
                     p.triangles.kept,
                     p.triangles_total,
                     p.triangles.culled_view,

@@ -51,6 +51,7 @@ pub use surface::{EyeDrawing, Surface, SurfaceBindings, SurfaceCullBindings, Sur
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
 
+use crate::epipolar::GridMapping;
 use crate::gpu::{GpuContext, GpuError, GpuTimer, ShaderLibrary};
 use crate::image::Image;
 use crate::params::{Baseline, Grid};
@@ -130,6 +131,9 @@ pub struct PruneReport {
     pub bins_z_casters: [f64; 2],
     /// 32-bit words per ray (the bins' precision is spent on `bins_z`).
     pub words_per_ray: u32,
+    /// The share of the grid's (plane, ray) cells that Voxelize and Scan keep: those the
+    /// frame's pixels read ([`GridMapping::plane_rays`]; 1 when that is off).
+    pub plane_ray_cells: f64,
     pub triangles_total: u32,
     /// Kept and dropped triangles, and Voxelize's work items (zero when no voxel pass ran).
     pub triangles: CullCounts,
@@ -178,8 +182,8 @@ struct FrameKey {
     method: Method,
     /// Whether the medium scatters at all: without it no voxel pass runs.
     scatters: bool,
-    /// prune, keep_geometry.
-    switches: [bool; 2],
+    /// prune, keep_geometry, prune_plane_rays.
+    switches: [bool; 3],
 }
 
 impl FrameKey {
@@ -209,8 +213,28 @@ impl FrameKey {
             uniforms: bytemuck::cast(u),
             method: setup.method,
             scatters: scene.needs_scattering(),
-            switches: [r.prune, r.keep_geometry],
+            switches: [r.prune, r.keep_geometry, r.prune_plane_rays],
         }
+    }
+}
+
+/// What a frame's per-plane ray cells ([`GridMapping::plane_rays`]) are computed from, and
+/// whether they are pruned at all.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PlaneRaysKey {
+    mapping: GridMapping,
+    frame: crate::epipolar::EpipolarFrame,
+    camera: crate::scene::Camera,
+    size: [u32; 2],
+    pruned: bool,
+    /// (Not an input: the share of the cells kept, for [`PruneReport::plane_ray_cells`].)
+    kept: f64,
+}
+
+impl PlaneRaysKey {
+    /// The same inputs (`kept` follows from them).
+    fn same_inputs(&self, other: &PlaneRaysKey) -> bool {
+        PlaneRaysKey { kept: 0.0, ..*self } == PlaneRaysKey { kept: 0.0, ..*other }
     }
 }
 
@@ -395,6 +419,12 @@ pub struct Renderer {
     /// scattered light's error against the reference is lower, not higher (0.992% -> 0.985%;
     /// docs/results.md, session 30). Off (`--pixels all`) integrates every pixel.
     pub adaptive_pixels: bool,
+    /// Voxelize and Scan keep, per plane, only the ray cells its pixels read
+    /// ([`GridMapping::plane_rays`]; part of pruning: off with `prune`, and on its own only to
+    /// compare, `tests/pruning.rs`; frames with [`Renderer::grid_shadows`] keep every cell). The image is the same to the bit; on the classroom 14% of
+    /// the non-zero words of the grid lie past a plane's last read cell, and 23% before its
+    /// first, where they fold into one (docs/results.md, session 33).
+    pub prune_plane_rays: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
@@ -421,6 +451,10 @@ pub struct Renderer {
     geometry: Option<Geometry>,
     targets: Option<Targets>,
     grid: Option<(Grid, wgpu::Buffer)>,
+    /// Per plane of the grid, the ray cells its pixels read ([`GridMapping::plane_rays`]), which
+    /// bound Voxelize and Scan; made with the grid, written when what it is computed from
+    /// changes (`PlaneRaysKey`).
+    plane_rays: Option<(wgpu::Buffer, Option<PlaneRaysKey>)>,
     /// A copy of the grid taken between voxelize and scan (the geometry voxels), kept only while
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
@@ -468,6 +502,7 @@ impl Renderer {
             fit_shadow_map: true,
             grid_shadows: false,
             adaptive_pixels: true,
+            prune_plane_rays: true,
             last_fitted: false,
             pyramid_to_build: None,
             reuse_unchanged: true,
@@ -479,6 +514,7 @@ impl Renderer {
             geometry: None,
             targets: None,
             grid: None,
+            plane_rays: None,
             geometry_copy: None,
             keep_geometry: false,
             variant: None,
@@ -577,6 +613,7 @@ impl Renderer {
             bins_z: bins,
             bins_z_casters: [z(m.z_lo), z(m.z_hi)],
             words_per_ray: m.grid.words(),
+            plane_ray_cells: self.plane_rays.as_ref().and_then(|(_, k)| k.as_ref()).map_or(1.0, |k| k.kept),
             triangles_total: self.geometry.as_ref().map_or(0, |g| g.gpu.triangle_count),
             triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
             passes: info.passes.clone(),
@@ -689,7 +726,14 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let plane_rays = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Renderer::plane_rays"),
+            size: grid.planes as u64 * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         self.grid = Some((grid, bits));
+        self.plane_rays = Some((plane_rays, None));
         self.geometry_copy = None;
         self.stale_bindings = true;
         Ok(())
@@ -697,7 +741,11 @@ impl Renderer {
 
     /// Makes every pass's bind groups for the current resources (after any of them changed).
     fn rebind(&mut self) {
-        let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else { return };
+        let (Some(geometry), Some(t), Some((_, bits)), Some((plane_rays, _))) =
+            (&self.geometry, &self.targets, &self.grid, &self.plane_rays)
+        else {
+            return;
+        };
         let d = &self.ctx.device;
         let p = &mut self.passes;
         use wgpu::BindingResource as R;
@@ -711,8 +759,13 @@ impl Renderer {
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
-        p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, &p.cull);
-        p.scan.bind(d, ScanBindings { frame_in: frame(), grid: bits.as_entire_binding() });
+        p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, plane_rays, &p.cull);
+        let scan = ScanBindings {
+            frame_in: frame(),
+            grid: bits.as_entire_binding(),
+            plane_rays: plane_rays.as_entire_binding(),
+        };
+        p.scan.bind(d, scan);
         p.scatter_table.bind(d, &self.frame_buffer);
         let integrate = IntegrateInputs {
             frame_in: frame(),
@@ -784,8 +837,42 @@ impl Renderer {
         self.pyramid_to_build = build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
+        self.write_plane_rays(scene, &setup);
         let key = FrameKey::new(self, scene, &setup, &faces, &shadow_lookup);
         Ok(Prepared { setup, variant, key, faces, face_count })
+    }
+
+    /// Writes the frame's per-plane ray cells ([`GridMapping::plane_rays`]) unless the buffer
+    /// holds them: a VSV frame's with pruning, every cell otherwise (the Cartesian grid's rows,
+    /// `--no-prune`, surface shadows from the grid).
+    fn write_plane_rays(&mut self, scene: &Scene, setup: &FrameSetup) {
+        let Some((buffer, written)) = &mut self.plane_rays else { return };
+        let u = &setup.uniforms;
+        let key = PlaneRaysKey {
+            mapping: setup.mapping,
+            frame: setup.frame,
+            camera: scene.camera,
+            size: [setup.width, setup.height],
+            // The grid's surface shadows read cells around each surface point's reach, up to
+            // sixteen cells' width away from the pixel's own (integrate.wgsl, `sample_lit`): a
+            // bound on that is not worth its margin, so their frames keep every cell.
+            pruned: self.prune && self.prune_plane_rays && setup.method == Method::Vsv && !setup.grid_shadowed(),
+            kept: 1.0,
+        };
+        if written.as_ref().is_some_and(|w| w.same_inputs(&key)) {
+            return;
+        }
+        let grid = setup.mapping.grid;
+        let cells = if key.pruned {
+            let aspect = setup.width as f64 / setup.height as f64;
+            setup.mapping.plane_rays(&setup.frame, &scene.camera, aspect)
+        } else {
+            vec![[0, grid.rays]; grid.planes as usize]
+        };
+        debug_assert_eq!((u.grid.x, u.grid.y), (grid.planes, grid.rays));
+        self.ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&cells));
+        let kept: u64 = cells.iter().map(|c| u64::from(c[1] - c[0])).sum();
+        *written = Some(PlaneRaysKey { kept: kept as f64 / (grid.planes as f64 * grid.rays as f64), ..key });
     }
 
     /// The frame's `work` uniforms (Voxelize's list shape and the coarsest pyramid level Cull

@@ -5,14 +5,16 @@
 //!
 //! A thread per column (a plane's four words of bins) walks its rays in turn; or, with
 //! `Renderer::scan_columns`, a workgroup per plane splits its columns' rays into runs
-//! (`scan_columns.wgsl`).
+//! (`scan_columns.wgsl`). Each plane's walk covers only the ray cells its pixels read
+//! ([`crate::epipolar::GridMapping::plane_rays`]), into which Voxelize clamped every caster
+//! before them.
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
 
 bindings! {
     /// Scan's bind group (scan.wgsl).
-    ScanBindings { frame_in: Kind::Storage, grid: Kind::StorageRw }
+    ScanBindings { frame_in: Kind::Storage, grid: Kind::StorageRw, plane_rays: Kind::Storage }
 }
 
 pub struct Scan {

@@ -15,6 +15,10 @@
 //! threads of a SIMD group (8 on llvmpipe) share a stretch of the list and take every 8th item of
 //! it, so that at each step their lanes hold neighbouring items (mostly neighbouring planes of one
 //! triangle) and finish their walks over bins together.
+//!
+//! Per plane only the ray cells its pixels read are kept
+//! ([`crate::epipolar::GridMapping::plane_rays`]): a hit past them sets nothing, a caster before
+//! them goes into the first (the scan carries it forward from there).
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -30,6 +34,7 @@ bindings! {
         offsets: Kind::Storage,
         blocks: Kind::Storage,
         counters: Kind::Storage,
+        plane_rays: Kind::Storage,
     }
 }
 
@@ -85,6 +90,7 @@ impl Voxelize {
         frame: &wgpu::Buffer,
         geometry: &super::SceneGpu,
         grid: &wgpu::Buffer,
+        plane_rays: &wgpu::Buffer,
         cull: &super::Cull,
     ) {
         let l = &geometry.lists;
@@ -99,6 +105,7 @@ impl Voxelize {
                     offsets: l.offsets.as_entire_binding(),
                     blocks: l.blocks.as_entire_binding(),
                     counters: cull.counters.as_entire_binding(),
+                    plane_rays: plane_rays.as_entire_binding(),
                 };
                 b.bind(device, &format!("Voxelize::bind_group[{i}]"), &self.layout)
             })

@@ -69,7 +69,12 @@ pub fn prune_lines(p: &PruneReport, point_light: bool) -> Vec<String> {
         v.push("fitting the work to the frame is off".into());
     }
     v.push(format!("planes: over {:.1}° of 360°", p.planes_span_deg));
-    v.push(format!("rays: γ {:.1}°–{:.1}°", p.rays_gamma_deg[0], p.rays_gamma_deg[1]));
+    v.push(format!(
+        "rays: γ {:.1}°–{:.1}°, {:.0}% of the plane × ray cells (those the pixels read)",
+        p.rays_gamma_deg[0],
+        p.rays_gamma_deg[1],
+        p.plane_ray_cells * 100.0
+    ));
     v.push(format!(
         "bins: z {:.3}–{:.3}{unit} (casters {:.3}–{:.3}{unit}), {} words per ray",
         p.bins_z[0], p.bins_z[1], p.bins_z_casters[0], p.bins_z_casters[1], p.words_per_ray
