@@ -202,7 +202,9 @@ pub struct RenderArgs {
     #[arg(long, allow_hyphen_values = true, value_parser = parse_exposure,
           help = spec_help("Exposure for the PNG", &Exposure::STOPS))]
     pub exposure: Option<f32>,
-    /// Turn off fitting the work to the frame (DESIGN section 6): full bin range from the casters.
+    /// Turn off fitting the work to the frame (DESIGN section 6, docs/pruning.md): the full circle of planes, every ray
+    /// cell of every plane and the casters' whole bin range, and every triangle voxelized but a solid's faces turned
+    /// away from the light.
     #[arg(long)]
     pub no_prune: bool,
     /// Spread a sun's shadow map over the casters' whole rectangle instead of narrowing it to what
