@@ -307,22 +307,23 @@ impl GridMapping {
 }
 
 /// Planes either side of a pixel's plane coordinate whose rays it may read: Integrate blends the
-/// two planes around it and the grid's surface shadows a tent over four (integrate.wgsl), so plane
-/// x serves the pixels whose coordinate lies in [x - 1.5, x + 2.5); one more for safety.
+/// two planes around it (integrate.wgsl), so plane x serves the pixels whose coordinate lies in
+/// [x - 0.5, x + 1.5); one plane more either side for the f32 angles and safety.
 pub const PLANE_RAYS_PLANE_MARGIN: f64 = 2.5;
 /// Ray cells kept below the lowest and above the highest cell a plane's pixels lie in, on top of
 /// the rays' pad: room for the GPU's f32 angles against these f64 ones.
 pub const PLANE_RAYS_CELL_MARGIN: u32 = 4;
 
 impl GridMapping {
-    /// Per plane, the ray cells `[first, end)` that the frame's pixels can read
-    /// (`PlaneRays`, shaders/common.wgsl): Voxelize sets no bit past `end` and clamps every
-    /// caster below `first` into `first`, and Scan walks only those cells. The prefix-OR then
-    /// gives every cell in `[first, end)` the same bits as the whole grid would, so the image is
-    /// the same to the bit, while rays that no pixel reads cost neither atomics nor the scan.
+    /// Per plane, the ray cells `[first, end)` that the frame's pixels can read (the
+    /// `plane_rays` buffer of voxelize.wgsl and the scan shaders): Voxelize sets no bit past
+    /// `end` and clamps every caster below `first` into `first`, and Scan walks only those cells.
+    /// The prefix-OR then gives every cell in `[first, end)` the same bits as the whole grid
+    /// would, so the image is the same to the bit, while rays that no pixel reads cost neither
+    /// atomics nor the scan.
     ///
-    /// The pixels of the `width x height` image lie inside its border, so the gamma range of plane
-    /// x is the range of the border's directions whose plane coordinate lies within
+    /// The pixels of an image of aspect ratio `aspect` lie inside its border, so the gamma range
+    /// of plane x is the range of the border's directions whose plane coordinate lies within
     /// [`PLANE_RAYS_PLANE_MARGIN`] of it (along an epipolar line gamma is monotonic, so its
     /// extremes lie where the line crosses the border), down to 0 when the light's point is on
     /// screen and up to pi when the opposite point is. The border is cut into short segments and

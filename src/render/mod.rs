@@ -421,9 +421,10 @@ pub struct Renderer {
     pub adaptive_pixels: bool,
     /// Voxelize and Scan keep, per plane, only the ray cells its pixels read
     /// ([`GridMapping::plane_rays`]; part of pruning: off with `prune`, and on its own only to
-    /// compare, `tests/pruning.rs`; frames with [`Renderer::grid_shadows`] keep every cell). The image is the same to the bit; on the classroom 14% of
-    /// the non-zero words of the grid lie past a plane's last read cell, and 23% before its
-    /// first, where they fold into one (docs/results.md, session 33).
+    /// compare, `tests/pruning.rs`; frames with [`Renderer::grid_shadows`] keep every cell).
+    /// The image is the same to the bit; on the classroom 14% of the grid's non-zero words lay
+    /// past a plane's last read cell and 23% before its first, where they now fold into one
+    /// (docs/results.md, session 33).
     pub prune_plane_rays: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
@@ -853,9 +854,9 @@ impl Renderer {
             frame: setup.frame,
             camera: scene.camera,
             size: [setup.width, setup.height],
-            // The grid's surface shadows read cells around each surface point's reach, up to
-            // sixteen cells' width away from the pixel's own (integrate.wgsl, `sample_lit`): a
-            // bound on that is not worth its margin, so their frames keep every cell.
+            // The grid's surface shadows read cells around each surface point's reach, which
+            // moves away from the pixel's own cell with the surface's slope to the light
+            // (integrate.wgsl, `sample_lit`): their frames keep every cell.
             pruned: self.prune && self.prune_plane_rays && setup.method == Method::Vsv && !setup.grid_shadowed(),
             kept: 1.0,
         };
