@@ -188,20 +188,49 @@ pub struct GridMapping {
     pub spacing: BinSpacing,
 }
 
+/// The image's border as view directions: where the extremes of gamma and phi over the image lie
+/// (unless the light's point or its opposite is on screen, which `on_screen` tells).
+struct ImageBorder {
+    r: DVec3,
+    u: DVec3,
+    f: DVec3,
+    /// tan of the half fields of view across and up.
+    tw: f64,
+    th: f64,
+}
+
+impl ImageBorder {
+    fn new(camera: &Camera, aspect: f64) -> ImageBorder {
+        let [r, u, f] = camera.basis_f64();
+        let th = ((camera.fov_y_deg as f64).to_radians() * 0.5).tan();
+        ImageBorder { r: DVec3::from(r), u: DVec3::from(u), f: DVec3::from(f), tw: th * aspect, th }
+    }
+
+    fn on_screen(&self, d: DVec3) -> bool {
+        let z = d.dot(self.f);
+        z > 0.0 && (d.dot(self.r) / z).abs() <= self.tw && (d.dot(self.u) / z).abs() <= self.th
+    }
+
+    /// Direction `i` of `4 n` around the border (`n` per side, bottom, right, top, left).
+    fn dir(&self, i: usize, n: usize) -> DVec3 {
+        let s = (i % n) as f64 / n as f64 * 2.0 - 1.0;
+        let (x, y) = match i / n {
+            0 => (s, -1.0),
+            1 => (1.0, s),
+            2 => (-s, 1.0),
+            _ => (-1.0, -s),
+        };
+        (self.f + self.r * (x * self.tw) + self.u * (y * self.th)).normalize()
+    }
+}
+
 impl GridMapping {
     /// Fits the ranges: planes and rays to what a `width x height` image of `camera` sees, bins to the
     /// casters inside `casters` (their bounds).
     pub fn fit(frame: &EpipolarFrame, camera: &Camera, aspect: f64, casters: &Aabb, grid: Grid) -> GridMapping {
-        let [r, u, f] = camera.basis_f64();
-        let (r, u, f) = (DVec3::from(r), DVec3::from(u), DVec3::from(f));
-        let th = ((camera.fov_y_deg as f64).to_radians() * 0.5).tan();
-        let tw = th * aspect;
-        let on_screen = |d: DVec3| {
-            let z = d.dot(f);
-            z > 0.0 && (d.dot(r) / z).abs() <= tw && (d.dot(u) / z).abs() <= th
-        };
-        let epipole_on = on_screen(frame.axis);
-        let anti_on = on_screen(-frame.axis);
+        let border = ImageBorder::new(camera, aspect);
+        let epipole_on = border.on_screen(frame.axis);
+        let anti_on = border.on_screen(-frame.axis);
 
         // Sample the image border: extremes of gamma and phi over the image lie on it unless the
         // (anti-)epipole is inside.
@@ -209,14 +238,7 @@ impl GridMapping {
         let mut phis = Vec::with_capacity(4 * N);
         let (mut g_lo, mut g_hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for i in 0..4 * N {
-            let s = (i % N) as f64 / N as f64 * 2.0 - 1.0;
-            let (x, y) = match i / N {
-                0 => (s, -1.0),
-                1 => (1.0, s),
-                2 => (-s, 1.0),
-                _ => (-1.0, -s),
-            };
-            let d = (f + r * (x * tw) + u * (y * th)).normalize();
+            let d = border.dir(i, N);
             let g = angle_between(frame.axis, d);
             g_lo = g_lo.min(g);
             g_hi = g_hi.max(g);
@@ -332,30 +354,16 @@ impl GridMapping {
     pub fn plane_rays(&self, frame: &EpipolarFrame, camera: &Camera, aspect: f64) -> Vec<[u32; 2]> {
         let planes = self.grid.planes as usize;
         let rays = self.grid.rays;
-        let [r, u, f] = camera.basis_f64();
-        let (r, u, f) = (DVec3::from(r), DVec3::from(u), DVec3::from(f));
-        let th = ((camera.fov_y_deg as f64).to_radians() * 0.5).tan();
-        let tw = th * aspect;
-        let on_screen = |d: DVec3| {
-            let z = d.dot(f);
-            z > 0.0 && (d.dot(r) / z).abs() <= tw && (d.dot(u) / z).abs() <= th
-        };
-        let epipole_on = on_screen(frame.axis);
-        let anti_on = on_screen(-frame.axis);
+        let border = ImageBorder::new(camera, aspect);
+        let epipole_on = border.on_screen(frame.axis);
+        let anti_on = border.on_screen(-frame.axis);
         let mut lo = vec![f64::INFINITY; planes];
         let mut hi = vec![f64::NEG_INFINITY; planes];
         // Two samples per plane along each side: a segment's gamma between its ends strays from
         // them by ~(its angle)^2, far below the pad.
         let n = (2 * planes).max(256);
         let sample = |i: usize| {
-            let s = (i % n) as f64 / n as f64 * 2.0 - 1.0;
-            let (x, y) = match i / n {
-                0 => (s, -1.0),
-                1 => (1.0, s),
-                2 => (-s, 1.0),
-                _ => (-1.0, -s),
-            };
-            let d = (f + r * (x * tw) + u * (y * th)).normalize();
+            let d = border.dir(i, n);
             (self.plane_coord(frame.phi_of_dir(d)), angle_between(frame.axis, d))
         };
         let p = planes as f64;
