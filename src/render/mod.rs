@@ -227,15 +227,6 @@ struct PlaneRaysKey {
     camera: crate::scene::Camera,
     size: [u32; 2],
     pruned: bool,
-    /// (Not an input: the share of the cells kept, for [`PruneReport::plane_ray_cells`].)
-    kept: f64,
-}
-
-impl PlaneRaysKey {
-    /// The same inputs (`kept` follows from them).
-    fn same_inputs(&self, other: &PlaneRaysKey) -> bool {
-        PlaneRaysKey { kept: 0.0, ..*self } == PlaneRaysKey { kept: 0.0, ..*other }
-    }
 }
 
 /// Everything the shadow map is drawn from: the light's faces and lookup uniforms (the light, the
@@ -454,8 +445,9 @@ pub struct Renderer {
     grid: Option<(Grid, wgpu::Buffer)>,
     /// Per plane of the grid, the ray cells its pixels read ([`GridMapping::plane_rays`]), which
     /// bound Voxelize and Scan; made with the grid, written when what it is computed from
-    /// changes (`PlaneRaysKey`).
-    plane_rays: Option<(wgpu::Buffer, Option<PlaneRaysKey>)>,
+    /// changes: what it holds was computed from that key, and keeps that share of the cells
+    /// ([`PruneReport::plane_ray_cells`]).
+    plane_rays: Option<(wgpu::Buffer, Option<(PlaneRaysKey, f64)>)>,
     /// A copy of the grid taken between voxelize and scan (the geometry voxels), kept only while
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
@@ -614,7 +606,7 @@ impl Renderer {
             bins_z: bins,
             bins_z_casters: [z(m.z_lo), z(m.z_hi)],
             words_per_ray: m.grid.words(),
-            plane_ray_cells: self.plane_rays.as_ref().and_then(|(_, k)| k.as_ref()).map_or(1.0, |k| k.kept),
+            plane_ray_cells: self.plane_rays.as_ref().and_then(|(_, w)| *w).map_or(1.0, |(_, kept)| kept),
             triangles_total: self.geometry.as_ref().map_or(0, |g| g.gpu.triangle_count),
             triangles: if voxels_ran { self.cull_counts()? } else { CullCounts::default() },
             passes: info.passes.clone(),
@@ -848,7 +840,6 @@ impl Renderer {
     /// `--no-prune`, surface shadows from the grid).
     fn write_plane_rays(&mut self, scene: &Scene, setup: &FrameSetup) {
         let Some((buffer, written)) = &mut self.plane_rays else { return };
-        let u = &setup.uniforms;
         let key = PlaneRaysKey {
             mapping: setup.mapping,
             frame: setup.frame,
@@ -858,9 +849,8 @@ impl Renderer {
             // moves away from the pixel's own cell with the surface's slope to the light
             // (integrate.wgsl, `sample_lit`): their frames keep every cell.
             pruned: self.prune && self.prune_plane_rays && setup.method == Method::Vsv && !setup.grid_shadowed(),
-            kept: 1.0,
         };
-        if written.as_ref().is_some_and(|w| w.same_inputs(&key)) {
+        if written.is_some_and(|(k, _)| k == key) {
             return;
         }
         let grid = setup.mapping.grid;
@@ -870,10 +860,9 @@ impl Renderer {
         } else {
             vec![[0, grid.rays]; grid.planes as usize]
         };
-        debug_assert_eq!((u.grid.x, u.grid.y), (grid.planes, grid.rays));
         self.ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&cells));
         let kept: u64 = cells.iter().map(|c| u64::from(c[1] - c[0])).sum();
-        *written = Some(PlaneRaysKey { kept: kept as f64 / (grid.planes as f64 * grid.rays as f64), ..key });
+        *written = Some((key, kept as f64 / (grid.planes as f64 * grid.rays as f64)));
     }
 
     /// The frame's `work` uniforms (Voxelize's list shape and the coarsest pyramid level Cull
