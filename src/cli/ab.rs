@@ -64,12 +64,7 @@ pub enum AbMethod {
 pub fn ab(args: AbArgs) -> Result<()> {
     let mut scene = match (&args.scene, args.room) {
         (Some(p), _) => load_scene(p)?,
-        (None, Some(n)) => {
-            // As the bench's triangle sweep times it.
-            let mut room = epivox::bench::procedural_scene(n);
-            room.grid = epivox::bench::PAPER_GRID;
-            room
-        }
+        (None, Some(n)) => super::procedural_room(n),
         (None, None) => builtin_scene(),
     };
     if let Some(g) = args.grid {

@@ -15,7 +15,9 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use epivox::epipolar::{EpipolarFrame, LightGeom};
 use epivox::gpu::{GpuContext, ShaderLibrary};
-use epivox::params::{unit_direction, Baseline, Exposure, Grid, ImageSize, Light, ReferenceQuality, Spec, View};
+use epivox::params::{
+    unit_direction, Baseline, Exposure, Grid, ImageSize, Light, Measure, ReferenceQuality, Spec, View,
+};
 use epivox::preset::Preset;
 use epivox::render::{Method as GpuMethod, RenderOutput, Renderer};
 use epivox::scene::{builtin_scene, load_scene_with_summary, LoadSummary, Scene};
@@ -151,6 +153,10 @@ pub enum Method {
 pub struct RenderArgs {
     /// A mesh (.gltf .glb .obj .ply), a folder of meshes or a Mitsuba scene, or a .toml scene file.
     pub scene: Option<PathBuf>,
+    #[arg(long, value_name = "TRIANGLES", conflicts_with = "scene",
+          value_parser = |s: &str| parse_count::<usize>(&Measure::ROOM, s),
+          help = spec_help("Render the bench's procedural room instead of SCENE, at the paper's grid unless --grid", &Measure::ROOM))]
+    pub room: Option<usize>,
     /// Output image: .png (tone mapped, 8-bit sRGB) or .exr (the linear image, float RGB).
     #[arg(long, short)]
     pub out: PathBuf,
@@ -390,11 +396,20 @@ struct Built {
     inputs: Vec<PathBuf>,
 }
 
+/// The bench's procedural room of at least `triangles` triangles at the paper's grid, as the
+/// bench's triangle sweep renders it (`render --room`, `ab --room`).
+pub(crate) fn procedural_room(triangles: usize) -> Scene {
+    let mut room = epivox::bench::procedural_scene(triangles);
+    room.grid = epivox::bench::PAPER_GRID;
+    room
+}
+
 /// Loads the scene and applies every override from the command line, validating the result.
 fn build_scene(args: &RenderArgs) -> Result<Built> {
-    let (mut scene, summary) = match &args.scene {
-        Some(p) => load_scene_with_summary(p)?,
-        None => (builtin_scene(), LoadSummary::default()),
+    let (mut scene, summary) = match (&args.scene, args.room) {
+        (Some(p), _) => load_scene_with_summary(p)?,
+        (None, Some(n)) => (procedural_room(n), LoadSummary::default()),
+        (None, None) => (builtin_scene(), LoadSummary::default()),
     };
     let mut inputs = summary.files.clone();
     inputs.extend(args.scene.clone());
@@ -445,7 +460,11 @@ fn build_scene(args: &RenderArgs) -> Result<Built> {
         let direction = unit_direction("--light-dir direction", d)?;
         scene.light = Light::Directional { direction, irradiance };
     }
-    let source = args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| "built-in scene".into());
+    let source = match (&args.scene, args.room) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(_)) => format!("the procedural room ({})", scene.name),
+        (None, None) => "built-in scene".into(),
+    };
     let overrides = args.eye.is_some()
         || args.target.is_some()
         || args.fov.is_some()
