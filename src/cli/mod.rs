@@ -462,7 +462,7 @@ fn build_scene(args: &RenderArgs) -> Result<Built> {
     }
     let source = match (&args.scene, args.room) {
         (Some(p), _) => p.display().to_string(),
-        (None, Some(_)) => format!("the procedural room ({})", scene.name),
+        (None, Some(_)) => scene.name.clone(),
         (None, None) => "built-in scene".into(),
     };
     let overrides = args.eye.is_some()
