@@ -365,6 +365,12 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     assert_eq!(j["scatter"]["same"], true, "{j}");
     assert_eq!(j["final"]["same"], true, "{j}");
     assert_eq!(j["a"]["round_ms"].as_array().map(Vec::len), Some(2), "{j}");
+    // B over A in each round alone: for the total and each pass A timed, one ratio a round.
+    let by_round = j["b_over_a_by_round"].as_object().expect("b_over_a_by_round");
+    let total = by_round["total"].as_array().expect("the total's ratios");
+    assert_eq!(total.len(), 2, "{j}");
+    assert!(total.iter().all(|r| r.as_f64().is_some_and(|r| r > 0.0)), "{j}");
+    assert!(by_round.len() > 1, "no pass's ratios: {j}");
     assert!(j["a"]["total_ms"].as_f64().is_some_and(|t| t >= 0.0), "{j}");
     let j = run(same, edited);
     assert_eq!(j["scatter"]["same"], false, "{j}");

@@ -12,11 +12,15 @@
 //! It answers the question of shader work, "is the edit faster, and did it change the picture?",
 //! from one run on one machine. A shared machine's speed drifts by tens of percent over minutes
 //! (docs/results.md): rounds that alternate which side goes first put a drift on both sides alike,
-//! and the per-round totals show how large it was.
+//! and the per-round totals show how large it was. Within a round the two sides run minutes
+//! apart at most, so B over A in each round alone ([`AbResult::round_ratios`]) is the steadier
+//! reading: its range over the rounds, and in how many of them B was faster (a sign test: with
+//! two sides of the same speed, B is faster in all of 6 rounds once in 64 runs, in all of 4 once
+//! in 16).
 
 use super::{style, time_frames, BenchError, Frames, Point, Timing};
 use crate::metrics::{self, ErrorStats};
-use crate::render::{Method, Renderer};
+use crate::render::{Method, Pass, Renderer};
 use crate::scene::Scene;
 use crate::Image;
 
@@ -41,6 +45,9 @@ pub struct AbSide {
     /// Per pass, the total and per round: medians over all the timed frames (GPU timestamps; wall
     /// clock without them, `passes` then empty), as the bench's.
     pub timing: Timing,
+    /// Per round, per pass: the medians of that round's frames alone (empty rounds without GPU
+    /// timestamps).
+    pub round_passes: Vec<Vec<(Pass, f64)>>,
     /// The median wall-clock time of a frame, from recording to the GPU's end (ms).
     pub wall_ms: f64,
     pub scatter: Image,
@@ -72,6 +79,49 @@ pub struct AbResult {
     pub b: AbSide,
     pub scatter: AbImages,
     pub hdr: AbImages,
+}
+
+impl AbResult {
+    /// B's time over A's in each round alone, in round order: for `pass`, or the frame's total
+    /// (`None`; the wall clock's without GPU timestamps). A round where either side lacks the pass
+    /// or A took no time is left out.
+    pub fn round_ratios(&self, pass: Option<Pass>) -> Vec<f64> {
+        let Some(pass) = pass else {
+            return ratios(self.a.timing.round_ms.iter().copied().zip(self.b.timing.round_ms.iter().copied()));
+        };
+        let of = |round: &[(Pass, f64)]| round.iter().find(|(p, _)| *p == pass).map(|(_, ms)| *ms);
+        let pairs = self.a.round_passes.iter().zip(&self.b.round_passes).filter_map(|(a, b)| of(a).zip(of(b)));
+        ratios(pairs)
+    }
+}
+
+/// What B/A by round says: its range, and in how many rounds B was faster and slower.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoundSummary {
+    pub min: f64,
+    pub max: f64,
+    pub faster: usize,
+    pub slower: usize,
+    pub rounds: usize,
+}
+
+impl RoundSummary {
+    /// `None` for no rounds.
+    pub fn of(ratios: &[f64]) -> Option<RoundSummary> {
+        let min = ratios.iter().copied().reduce(f64::min)?;
+        let max = ratios.iter().copied().reduce(f64::max)?;
+        Some(RoundSummary {
+            min,
+            max,
+            faster: ratios.iter().filter(|&&r| r < 1.0).count(),
+            slower: ratios.iter().filter(|&&r| r > 1.0).count(),
+            rounds: ratios.len(),
+        })
+    }
+}
+
+fn ratios(pairs: impl Iterator<Item = (f64, f64)>) -> Vec<f64> {
+    pairs.filter(|(a, _)| *a > 0.0).map(|(a, b)| b / a).collect()
 }
 
 /// Times `a` and `b` on `scene` (see the module's header) and compares their last frames.
@@ -127,13 +177,13 @@ pub fn run(a: &mut Renderer, b: &mut Renderer, scene: &Scene, opts: &AbOptions) 
 
 /// One side's medians from its pooled frames.
 fn side(frames: &Frames, timestamps: bool, scatter: Image, hdr: Image) -> AbSide {
-    AbSide { timing: frames.timing(timestamps), wall_ms: frames.timing(false).total_ms, scatter, hdr }
+    let round_passes = if timestamps { frames.round_pass_medians() } else { Vec::new() };
+    AbSide { timing: frames.timing(timestamps), round_passes, wall_ms: frames.timing(false).total_ms, scatter, hdr }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::Pass;
 
     fn image(v: f32) -> Image {
         Image::from_pixels(2, 1, vec![[v, 1.0, 1.0], [1.0, 1.0, 1.0]]).unwrap()
@@ -165,5 +215,41 @@ mod tests {
         assert_eq!(s.timing.total_ms, 27.5);
         assert_eq!(s.wall_ms, 55.0);
         assert_eq!(s.timing.round_ms, vec![22.0, 38.5]);
+        assert_eq!(
+            s.round_passes,
+            vec![
+                vec![(Pass::Surface, 2.0), (Pass::Voxelize, 20.0)],
+                vec![(Pass::Surface, 3.5), (Pass::Voxelize, 35.0)]
+            ]
+        );
+    }
+
+    #[test]
+    fn ratios_by_round_pair_each_round_of_a_with_the_same_round_of_b() {
+        let frames = |rounds: &[(f64, f64)]| {
+            let mut all = Frames::default();
+            for &(s, v) in rounds {
+                all.pool(Frames {
+                    passes: vec![vec![(Pass::Surface, s), (Pass::Voxelize, v)]],
+                    wall: vec![s + v],
+                    rounds: vec![1],
+                });
+            }
+            side(&all, true, image(0.0), image(0.0))
+        };
+        // The machine slows round by round (A's Voxelize 10, 20, 40 ms); B is 10% faster in
+        // Voxelize within every round, whatever the drift.
+        let a = frames(&[(1.0, 10.0), (1.0, 20.0), (1.0, 40.0)]);
+        let b = frames(&[(2.0, 9.0), (1.0, 18.0), (0.5, 36.0)]);
+        let r = AbResult { a, b, scatter: AbImages::Same, hdr: AbImages::Same };
+        let v = r.round_ratios(Some(Pass::Voxelize));
+        assert_eq!(v.len(), 3);
+        assert!(v.iter().all(|x| (x - 0.9).abs() < 1e-12), "{v:?}");
+        let s = RoundSummary::of(&r.round_ratios(Some(Pass::Surface))).unwrap();
+        assert_eq!((s.min, s.max, s.faster, s.slower, s.rounds), (0.5, 2.0, 1, 1, 3));
+        // The totals' ratios come from each round's total, a pass missing from a side from none.
+        assert_eq!(r.round_ratios(None).len(), 3);
+        assert!(r.round_ratios(Some(Pass::Scan)).is_empty());
+        assert_eq!(RoundSummary::of(&[]), None);
     }
 }

@@ -439,20 +439,33 @@ impl Frames {
         let volume = median(
             per_frame.iter().map(|f| f.iter().filter(|p| !SHARED_PASSES.contains(&p.0)).map(|p| p.1).sum()).collect(),
         );
-        let passes = per_frame
-            .first()
-            .map(|first| {
-                first
-                    .iter()
-                    .map(|&(pass, _)| {
-                        let v = per_frame.iter().filter_map(|f| f.iter().find(|p| p.0 == pass).map(|p| p.1)).collect();
-                        (pass, median(v))
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
-        Timing { total_ms: total, volume_ms: volume, passes, frames, round_ms }
+        Timing { total_ms: total, volume_ms: volume, passes: pass_medians(per_frame), frames, round_ms }
     }
+
+    /// Per round, the median of each pass over that round's frames alone (empty per round without
+    /// GPU timestamps).
+    fn round_pass_medians(&self) -> Vec<Vec<(Pass, f64)>> {
+        let mut out = Vec::with_capacity(self.rounds.len());
+        let mut start = 0;
+        for &n in &self.rounds {
+            let end = (start + n).min(self.passes.len());
+            out.push(pass_medians(&self.passes[start..end]));
+            start = end;
+        }
+        out
+    }
+}
+
+/// The median of each pass over `frames`, in the first frame's pass order.
+fn pass_medians(frames: &[Vec<(Pass, f64)>]) -> Vec<(Pass, f64)> {
+    let Some(first) = frames.first() else { return Vec::new() };
+    first
+        .iter()
+        .map(|&(pass, _)| {
+            let v = frames.iter().filter_map(|f| f.iter().find(|p| p.0 == pass).map(|p| p.1)).collect();
+            (pass, median(v))
+        })
+        .collect()
 }
 
 /// Renders `warmup + frames` frames of `point` and returns the timed frames and the last one's

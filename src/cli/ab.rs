@@ -1,7 +1,7 @@
 //! `epivox ab`: the command-line side of [`epivox::bench::ab`].
 
 use anyhow::{bail, Context, Result};
-use epivox::bench::ab::{self, AbImages, AbOptions, AbResult};
+use epivox::bench::ab::{self, AbImages, AbOptions, AbResult, RoundSummary};
 use epivox::gpu::{GpuContext, ShaderLibrary};
 use epivox::params::{Grid, Measure};
 use epivox::render::{Method as GpuMethod, Renderer};
@@ -135,7 +135,7 @@ fn shader_folder(r: &Renderer) -> String {
 fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
     println!("A: {a_dir}");
     println!("B: {b_dir}");
-    println!("{:<14} {:>10} {:>10} {:>7}", "pass (ms)", "A", "B", "B/A");
+    println!("{:<14} {:>10} {:>10} {:>7}  B/A by round", "pass (ms)", "A", "B", "B/A");
     let mut passes: Vec<_> = r.a.timing.passes.iter().map(|(p, _)| *p).collect();
     passes.extend(r.b.timing.passes.iter().map(|(p, _)| *p).filter(|p| !r.a.timing.passes.iter().any(|(q, _)| q == p)));
     let of = |side: &[(epivox::render::Pass, f64)], p| side.iter().find(|(q, _)| *q == p).map(|(_, ms)| *ms);
@@ -143,14 +143,16 @@ fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
     for p in passes {
         let (x, y) = (of(&r.a.timing.passes, p), of(&r.b.timing.passes, p));
         let ratio = x.zip(y).filter(|(x, _)| *x > 0.0).map_or_else(|| "-".into(), |(x, y)| format!("{:.3}", y / x));
-        println!("{:<14} {:>10} {:>10} {:>7}", p.to_string(), cell(x), cell(y), ratio);
+        let rounds = by_round(&r.round_ratios(Some(p)));
+        println!("{:<14} {:>10} {:>10} {:>7}  {rounds}", p.to_string(), cell(x), cell(y), ratio);
     }
     println!(
-        "{:<14} {:>10.2} {:>10.2} {:>7.3}",
+        "{:<14} {:>10.2} {:>10.2} {:>7.3}  {}",
         "total",
         r.a.timing.total_ms,
         r.b.timing.total_ms,
-        r.b.timing.total_ms / r.a.timing.total_ms.max(f64::MIN_POSITIVE)
+        r.b.timing.total_ms / r.a.timing.total_ms.max(f64::MIN_POSITIVE),
+        by_round(&r.round_ratios(None))
     );
     println!(
         "{:<14} {:>10.2} {:>10.2} {:>7.3}",
@@ -167,6 +169,16 @@ fn print_table(r: &AbResult, a_dir: &str, b_dir: &str) {
     }
     println!("scattered light: {}", describe(&r.scatter));
     println!("final image: {}", describe(&r.hdr));
+}
+
+/// B/A's range over the rounds and in how many B was faster: "0.912-0.957, faster in 4 of 4".
+fn by_round(ratios: &[f64]) -> String {
+    let Some(s) = RoundSummary::of(ratios) else { return "-".into() };
+    let mut text = format!("{:.3}-{:.3}, faster in {} of {}", s.min, s.max, s.faster, s.rounds);
+    if s.faster + s.slower < s.rounds {
+        text.push_str(&format!(" ({} equal)", s.rounds - s.faster - s.slower));
+    }
+    text
 }
 
 fn describe(images: &AbImages) -> String {
@@ -195,11 +207,16 @@ fn to_json(r: &AbResult, scene: &str, a_dir: &str, b_dir: &str, adapter: &str) -
         AbImages::Same => serde_json::json!({ "same": true }),
         AbImages::Differ(e) => serde_json::json!({ "same": false, "error": e.map(|e| e.to_json()) }),
     };
+    // B over A in each round alone, per pass and for the total.
+    let mut by_round: serde_json::Map<String, serde_json::Value> =
+        r.a.timing.passes.iter().map(|(p, _)| (p.to_string(), serde_json::json!(r.round_ratios(Some(*p))))).collect();
+    by_round.insert("total".into(), serde_json::json!(r.round_ratios(None)));
     serde_json::json!({
         "adapter": adapter,
         "scene": scene,
         "a": side(&r.a, a_dir),
         "b": side(&r.b, b_dir),
+        "b_over_a_by_round": by_round,
         "scatter": images(&r.scatter),
         "final": images(&r.hdr),
     })
