@@ -12,11 +12,11 @@
 //! It answers the question of shader work, "is the edit faster, and did it change the picture?",
 //! from one run on one machine. A shared machine's speed drifts by tens of percent over minutes
 //! (docs/results.md): rounds that alternate which side goes first put a drift on both sides alike,
-//! and the per-round totals show how large it was. Within a round the two sides run minutes
-//! apart at most, so B over A in each round alone ([`AbResult::round_ratios`]) is the steadier
-//! reading: its range over the rounds, and in how many of them B was faster (a sign test: with
-//! two sides of the same speed, B is faster in all of 6 rounds once in 64 runs, in all of 4 once
-//! in 16).
+//! and the per-round totals show how large it was. Within a round the two sides run one after
+//! the other, seconds apart, so B over A in each round alone ([`AbResult::round_ratios`]) is the
+//! steadier reading: its range over the rounds, and in how many of them B was faster (a sign
+//! test: with two sides of the same speed, B is faster in all of 6 rounds once in 64 runs, in all
+//! of 4 once in 16).
 
 use super::{style, time_frames, BenchError, Frames, Point, Timing};
 use crate::metrics::{self, ErrorStats};

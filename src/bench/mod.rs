@@ -424,13 +424,7 @@ impl Frames {
         } else {
             self.wall.clone()
         };
-        let mut round_ms = Vec::with_capacity(self.rounds.len());
-        let mut start = 0;
-        for &n in &self.rounds {
-            let end = (start + n).min(totals.len());
-            round_ms.push(median(totals[start..end].to_vec()));
-            start = end;
-        }
+        let round_ms = self.by_round(&totals).map(|r| median(r.to_vec())).collect();
         if !timestamps {
             return Timing { total_ms: median(totals), volume_ms: f64::NAN, passes: Vec::new(), frames, round_ms };
         }
@@ -445,14 +439,17 @@ impl Frames {
     /// Per round, the median of each pass over that round's frames alone (empty per round without
     /// GPU timestamps).
     fn round_pass_medians(&self) -> Vec<Vec<(Pass, f64)>> {
-        let mut out = Vec::with_capacity(self.rounds.len());
-        let mut start = 0;
-        for &n in &self.rounds {
-            let end = (start + n).min(self.passes.len());
-            out.push(pass_medians(&self.passes[start..end]));
-            start = end;
-        }
-        out
+        self.by_round(&self.passes).map(pass_medians).collect()
+    }
+
+    /// `per_frame` (one entry a frame, in order) cut into the rounds' frames.
+    fn by_round<'a, T>(&self, per_frame: &'a [T]) -> impl Iterator<Item = &'a [T]> + use<'a, '_, T> {
+        self.rounds.iter().scan(0, move |start, &n| {
+            let end = (*start + n).min(per_frame.len());
+            let round = &per_frame[(*start).min(end)..end];
+            *start = end;
+            Some(round)
+        })
     }
 }
 
