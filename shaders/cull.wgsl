@@ -1,6 +1,6 @@
 // cull.wgsl: which triangles can shadow a visible point, and the balanced work list Voxelize runs.
 //
-// `cull` (one thread per run of f.work.x triangles: 1 on a GPU, 16 on a CPU): the triangle's
+// `cull` (one thread per run of f.work.x triangles: 1 on a GPU, 64 on a CPU): the triangle's
 // footprint in light space, i.e. the planes x
 // whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
 // conservative cell range, two ranges across the seam at phi = 0, all planes when the axis pierces
@@ -131,7 +131,7 @@ fn cull_one(tri: u32) -> Kept {
     return k;
 }
 
-// A thread culls a run of f.work.x consecutive triangles (16 on a CPU, 1 on a GPU; Voxelize's
+// A thread culls a run of f.work.x consecutive triangles (64 on a CPU, 1 on a GPU; Voxelize's
 // run of items): on a CPU adapter a workgroup's start-up and the parameters' copy cost as much as
 // culling a triangle.
 @compute @workgroup_size(64)

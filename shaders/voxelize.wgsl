@@ -15,7 +15,7 @@
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and group of f.work.y 32-bit
 // words of bins (one word on a GPU, all of them on a CPU, where a plane's set-up costs more than
-// its bins); a thread takes a run of items (one on a GPU, 16 on a CPU, every LANES-th of a stretch
+// its bins); a thread takes a run of items (one on a GPU, 64 on a CPU, every LANES-th of a stretch
 // shared with its SIMD group: main, below). In the plane,
 // the triangle is a segment (its edges' crossings of the plane); along a segment z and gamma are
 // both monotonic, so the bins whose centre z lies in the segment's z range are exactly the light

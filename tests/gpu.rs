@@ -57,19 +57,19 @@ fn cartesian_matches_reference_for_an_axis_aligned_light() {
     assert!(err.contains("--light-dir"), "{err}");
 }
 
-/// Voxelize's work list has two knobs per adapter: the items a thread runs (16 on a CPU adapter,
+/// Voxelize's work list has two knobs per adapter: the items a thread runs (64 on a CPU adapter,
 /// 1 on a GPU) and the words of bins an item walks (every word on a CPU, 1 on a GPU). A run
 /// crosses from one triangle's items to the next and an item's words from one to the next, and
 /// every shape of the list must set exactly the bits that one thread per item of one word sets.
 /// The built-in room under both light types (hundreds of triangles, from one item to thousands
-/// each) at 128 bins (4 words): runs of 1, 3 (never aligned with a triangle's items) and 16, and
-/// groups of 1, 3 (a short last group) and 64 words.
+/// each) at 128 bins (4 words): runs of 1, 3 (never aligned with a triangle's items), 16 and 64,
+/// and groups of 1, 3 (a short last group) and 64 words.
 #[test]
 fn voxelize_work_lists_of_any_shape_set_the_same_bits() {
     let Some(mut r) = renderer() else { return };
     let mut sun = epivox::scene::builtin_scene();
     sun.light = Light::Directional { direction: Vec3::new(0.4, 1.0, 0.3).normalize(), irradiance: Vec3::splat(2.0) };
-    let shapes = [(1, 1), (3, 1), (16, 1), (1, 3), (3, 64), (16, 64)];
+    let shapes = [(1, 1), (3, 1), (16, 1), (1, 3), (3, 64), (16, 64), (64, 64)];
     for (name, mut scene) in [("point light", epivox::scene::builtin_scene()), ("sun", sun)] {
         scene.grid = Grid { planes: 256, rays: 128, bins: 128, ..Grid::default() };
         let mut grids = Vec::new();

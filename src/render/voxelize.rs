@@ -39,12 +39,15 @@ bindings! {
 }
 
 pub struct Voxelize {
-    /// Work items per thread (interleaved with its SIMD group's, voxelize.wgsl `main`). On a CPU
-    /// adapter (llvmpipe, which runs 8 lanes per core) the search for an item's triangle and the
-    /// triangle's reads were a quarter of the pass: runs of 16 took the classroom's Voxelize from
-    /// ~190 to ~150 ms (8 to 64 measured alike; 8 and 32 slower again in session 16). A GPU keeps
-    /// one item per thread, the balanced list this pass was designed around: a run of 16 would
-    /// leave most of a large GPU idle on the classroom's 1.3 M items (not measured there).
+    /// Work items per thread (interleaved with its SIMD group's, voxelize.wgsl `main`), and Cull's
+    /// triangles per thread (cull.wgsl). On a CPU adapter (llvmpipe, which runs 8 lanes per core)
+    /// the search for an item's triangle and the triangle's reads were a quarter of the pass: runs
+    /// of 16 took the classroom's Voxelize from ~190 to ~150 ms (session 16), and runs of 64
+    /// another 10% (session 35: 37.8 to 34.0 ms, faster in 8 of 8 rounds, and faster in every
+    /// round on the built-in room and the bench's rooms of 100 000 and a million triangles; 32,
+    /// 40, 96, 128 and 256 measured no better than 16). A GPU keeps one item per thread, the
+    /// balanced list this pass was designed around: a run of 64 would leave most of a large GPU
+    /// idle on the classroom's 1.3 M items (not measured there).
     pub items_per_thread: u32,
     /// 32-bit words of bins per work item: the words of one plane's segment that one item walks.
     /// A GPU takes one (a wall's segment spread over many threads). On a CPU adapter an item's
@@ -60,11 +63,14 @@ pub struct Voxelize {
 }
 
 impl Voxelize {
+    /// [`Voxelize::items_per_thread`] on a CPU adapter.
+    pub const CPU_ITEMS_PER_THREAD: u32 = 64;
+
     pub fn new(device: &wgpu::Device, lib: &ShaderLibrary, adapter: wgpu::DeviceType) -> Result<Voxelize, GpuError> {
         let module = lib.module(device, "voxelize.wgsl")?;
         let layout = VoxelizeBindings::layout(device, "Voxelize::layout", wgpu::ShaderStages::COMPUTE);
         Ok(Voxelize {
-            items_per_thread: if adapter == wgpu::DeviceType::Cpu { 16 } else { 1 },
+            items_per_thread: if adapter == wgpu::DeviceType::Cpu { Self::CPU_ITEMS_PER_THREAD } else { 1 },
             words_per_item: if adapter == wgpu::DeviceType::Cpu {
                 crate::params::Grid::BINS.max as u32 / 32
             } else {
