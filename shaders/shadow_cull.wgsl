@@ -30,25 +30,22 @@ struct ShadowCull {
 }
 
 @group(0) @binding(0) var<storage, read> cull_in: ShadowCull;
-// The scene's vertex buffer: [x, y, z, r, g, b] per vertex.
-@group(0) @binding(1) var<storage, read> vertices: array<f32>;
+// The scene's triangles, three vec4 vertices each in the order of `indices`, the first one's w its
+// mesh (SceneGpu's triangles, all of them in one chunk: ShadowMap::bind makes no lists otherwise):
+// three vector loads for a triangle's vertices and mesh where the vertex buffer took ten scalar
+// ones (on llvmpipe each a loop over the SIMD group's lanes).
+@group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 // Six regions of `counts.y` indices, face k's from k * counts.y.
 @group(0) @binding(3) var<storage, read_write> lists: array<u32>;
 // Six DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
 // instance); the index counts start at 0 each frame.
 @group(0) @binding(4) var<storage, read_write> args: array<atomic<u32>, 30>;
-// Per triangle: its mesh.
-@group(0) @binding(5) var<storage, read> triangle_meshes: array<u32>;
 // Per mesh: +1 keep only the faces whose winding normal (b - a) x (c - a) faces the light, -1
 // only those facing away, 0 all (SceneGpu::light_sides).
-@group(0) @binding(6) var<storage, read> sides: array<f32>;
+@group(0) @binding(5) var<storage, read> sides: array<f32>;
 // The sun map's pyramid of block maxima (shadow_pyramid.wgsl), for `sun`.
-@group(0) @binding(7) var<storage, read> pyramid: array<f32>;
-
-fn position(i: u32) -> vec3f {
-    return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
-}
+@group(0) @binding(6) var<storage, read> pyramid: array<f32>;
 
 // The four plane values of q for face k (>= 0 inside), with a margin for rounding.
 fn planes(q: vec3f, k: u32) -> vec4f {
@@ -67,14 +64,15 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     let t = id.x + id.y * groups.x * 64u;
     if (t >= cull_in.counts.x) { return; }
     let l = cull_in.light.xyz;
+    let v0 = tris[3u * t];
+    let q0 = v0.xyz - l;
+    let q1 = tris[3u * t + 1u].xyz - l;
+    let q2 = tris[3u * t + 2u].xyz - l;
+    // Toward the light is -q0; edge-on faces (dot 0) are kept.
+    if (sides[u32(v0.w)] * dot(cross(q1 - q0, q2 - q0), q0) > 0.0) { return; }
     let i0 = indices[3u * t];
     let i1 = indices[3u * t + 1u];
     let i2 = indices[3u * t + 2u];
-    let q0 = position(i0) - l;
-    let q1 = position(i1) - l;
-    let q2 = position(i2) - l;
-    // Toward the light is -q0; edge-on faces (dot 0) are kept.
-    if (sides[triangle_meshes[t]] * dot(cross(q1 - q0, q2 - q0), q0) > 0.0) { return; }
     for (var k = 0u; k < 6u; k++) {
         let outside = planes(q0, k) < vec4f(0.0) & planes(q1, k) < vec4f(0.0) & planes(q2, k) < vec4f(0.0);
         if (any(outside)) { continue; }
@@ -90,14 +88,12 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
 fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let t = id.x + id.y * groups.x * 64u;
     if (t >= cull_in.counts.x) { return; }
-    let i0 = indices[3u * t];
-    let i1 = indices[3u * t + 1u];
-    let i2 = indices[3u * t + 2u];
-    let p0 = position(i0);
-    let p1 = position(i1);
-    let p2 = position(i2);
+    let v0 = tris[3u * t];
+    let p0 = v0.xyz;
+    let p1 = tris[3u * t + 1u].xyz;
+    let p2 = tris[3u * t + 2u].xyz;
     // A solid's face away from the sun (Cull's test); edge-on faces (dot 0) are kept.
-    if (sides[triangle_meshes[t]] * dot(cross(p1 - p0, p2 - p0), cull_in.light.xyz) < 0.0) { return; }
+    if (sides[u32(v0.w)] * dot(cross(p1 - p0, p2 - p0), cull_in.light.xyz) < 0.0) { return; }
     // Wholly beyond one side of the map (fitted to the view, ShadowFit): it covers no texel.
     let m = cull_in.view_proj;
     let n0 = (m * vec4f(p0, 1.0)).xy;
@@ -113,7 +109,7 @@ fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups
     let same = all(pm[0] == m[0]) && all(pm[1] == m[1]) && all(pm[2] == m[2]) && all(pm[3] == m[3]);
     if (same && hidden_in_pyramid(m, f32(c.w), c.z, p0, p1, p2)) { return; }
     let at = atomicAdd(&args[0], 3u);
-    lists[at] = i0;
-    lists[at + 1u] = i1;
-    lists[at + 2u] = i2;
+    lists[at] = indices[3u * t];
+    lists[at + 1u] = indices[3u * t + 1u];
+    lists[at + 2u] = indices[3u * t + 2u];
 }

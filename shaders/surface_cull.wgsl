@@ -37,27 +37,28 @@
 #import workgroup_scan
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
-// The scene's vertex buffer: [x, y, z, r, g, b] per vertex.
-@group(0) @binding(1) var<storage, read> vertices: array<f32>;
+// The scene's triangles, three vec4 vertices each in the order of `indices`, the first one's w its
+// mesh (SceneGpu's triangles, all of them in one chunk: Surface::bind makes no list otherwise).
+// Three vector loads a triangle where the index and vertex buffers took thirteen scalar ones (the
+// indices, nine coordinates, the mesh): on llvmpipe each is a loop over the SIMD group's lanes.
+@group(0) @binding(1) var<storage, read> tris: array<vec4f>;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 // The indices Surface draws: the kept triangles of `indices`, in their order.
 @group(0) @binding(3) var<storage, read_write> lists: array<u32>;
-// Per triangle: its mesh.
-@group(0) @binding(4) var<storage, read> triangle_meshes: array<u32>;
 // Per mesh: +1 Surface draws only the faces whose winding normal (b - a) x (c - a) faces the eye,
 // -1 only those facing away, 0 all (SceneGpu::eye_sides, the pipelines' cull modes).
-@group(0) @binding(5) var<storage, read> sides: array<f32>;
+@group(0) @binding(4) var<storage, read> sides: array<f32>;
 // Per thread of `mark` (16 triangles): the kept ones as bits, and how many the block's threads
 // before it keep.
-@group(0) @binding(6) var<storage, read_write> threads: array<vec2u>;
+@group(0) @binding(5) var<storage, read_write> threads: array<vec2u>;
 // Per block of 1024 triangles: its kept count, then (after `places`) the kept count of the blocks
 // before it; one more entry after the last block: the total.
-@group(0) @binding(7) var<storage, read_write> blocks: array<u32>;
+@group(0) @binding(6) var<storage, read_write> blocks: array<u32>;
 // x of the first entry: how many runs this frame draws; then per run its triangles [x, y).
-@group(0) @binding(8) var<storage, read> runs: array<vec2u>;
+@group(0) @binding(7) var<storage, read> runs: array<vec2u>;
 // Per run: DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
 // instance).
-@group(0) @binding(9) var<storage, read_write> args: array<u32>;
+@group(0) @binding(8) var<storage, read_write> args: array<u32>;
 
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -68,16 +69,12 @@ const EPS: f32 = 0.015625;
 // toward the eye).
 const FACING_TOL: f32 = 1e-3;
 
-fn position(i: u32) -> vec3f {
-    return vec3f(vertices[6u * i], vertices[6u * i + 1u], vertices[6u * i + 2u]);
-}
-
 // Whether the triangle is a face Surface's pipeline culls: turned away from the eye on the side
 // its mesh skips.
-fn turned_away(t: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
+fn turned_away(mesh: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
     let n = cross(p1 - p0, p2 - p0);
     let to_eye = f.eye.xyz - p0;
-    return sides[triangle_meshes[t]] * dot(n, to_eye) < -FACING_TOL * length(n) * length(to_eye);
+    return sides[mesh] * dot(n, to_eye) < -FACING_TOL * length(n) * length(to_eye);
 }
 
 fn clip_of(p: vec3f) -> vec4f {
@@ -98,13 +95,14 @@ fn misses_centres(lo: f32, hi: f32, n: u32) -> bool {
 
 // Whether triangle t would draw nothing.
 fn empty(t: u32) -> bool {
-    let p0 = position(indices[3u * t]);
-    let p1 = position(indices[3u * t + 1u]);
-    let p2 = position(indices[3u * t + 2u]);
+    let v0 = tris[3u * t];
+    let p0 = v0.xyz;
+    let p1 = tris[3u * t + 1u].xyz;
+    let p2 = tris[3u * t + 2u].xyz;
     let a = clip_of(p0);
     let b = clip_of(p1);
     let c = clip_of(p2);
-    var empty = turned_away(t, p0, p1, p2);
+    var empty = turned_away(u32(v0.w), p0, p1, p2);
     if (!empty && min(a.w, min(b.w, c.w)) > 0.0) {
         let pa = pixel_of(a);
         let pb = pixel_of(b);

@@ -47,18 +47,16 @@ pub struct SceneGpu {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub index_count: u32,
-    /// Three `vec4<f32>` world vertices per triangle, for Cull and Voxelize, in chunks that each
-    /// fit the adapter's largest storage binding (one chunk unless the mesh is huge), with the
-    /// number of triangles in each.
+    /// Three `vec4<f32>` world vertices per triangle (the first one's `w` its mesh, as an f32),
+    /// for Cull and Voxelize, and whole for the eye's and the shadow map's culling
+    /// ([`SceneGpu::whole_triangles`]), in chunks that each fit the adapter's largest storage
+    /// binding (one chunk unless the mesh is huge), with the number of triangles in each.
     pub chunks: Vec<(wgpu::Buffer, u32)>,
     pub triangle_count: u32,
     /// The Cull pass's lists, sized for the largest chunk.
     pub lists: CullLists,
     /// Per mesh, in upload order (the index buffer holds them one after the other).
     pub meshes: Vec<MeshRange>,
-    /// Per triangle: its mesh (u32), for the shadow map's face culling. The triangle chunks carry
-    /// it too, as the first vertex's `w` (an f32).
-    pub triangle_meshes: wgpu::Buffer,
     /// Per mesh, written by [`SceneGpu::update_light_facing`]: `+1` keep only triangles whose
     /// winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
     pub light_sides: wgpu::Buffer,
@@ -73,6 +71,16 @@ impl SceneGpu {
     /// Bytes per triangle in a chunk.
     pub const TRIANGLE_BYTES: u64 = 48;
 
+    /// Every triangle's vertices and mesh in one buffer, in the index buffer's order, for the
+    /// culling passes that read them by triangle (surface_cull.wgsl, shadow_cull.wgsl): the one
+    /// chunk, unless the mesh needs several or its mesh numbers are past an f32's integers.
+    pub fn whole_triangles(&self) -> Option<&wgpu::Buffer> {
+        match self.chunks.as_slice() {
+            [(buffer, _)] if self.meshes.len() <= 1 << 24 => Some(buffer),
+            _ => None,
+        }
+    }
+
     /// The chunks that hold triangles, numbered, with their buffer and triangle count (a scene
     /// without triangles has none).
     pub fn nonempty_chunks(&self) -> impl Iterator<Item = (usize, &wgpu::Buffer, u32)> {
@@ -84,7 +92,6 @@ impl SceneGpu {
         let mut vertices: Vec<[f32; 6]> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(scene.triangle_count() * 3);
-        let mut triangle_meshes: Vec<u32> = Vec::with_capacity(scene.triangle_count());
         let closures: Vec<Closure> = scene.meshes.par_iter().map(solid::closure).collect();
         let mut meshes = Vec::with_capacity(scene.meshes.len());
         for (mesh, (m, &closure)) in scene.meshes.iter().zip(&closures).enumerate() {
@@ -93,7 +100,6 @@ impl SceneGpu {
             vertices.extend(m.positions.iter().map(|p| [p.x, p.y, p.z, m.albedo.x, m.albedo.y, m.albedo.z]));
             for t in &m.triangles {
                 indices.extend(t.iter().map(|&i| base + i));
-                triangle_meshes.push(mesh as u32);
                 for (k, &i) in t.iter().enumerate() {
                     let p = m.positions[i as usize];
                     // The first vertex's w: the mesh, for Cull's side test (a float holding an
@@ -114,8 +120,7 @@ impl SceneGpu {
         let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("SceneGpu::vertices"),
             contents: bytemuck::cast_slice(&vertices),
-            // STORAGE: the shadow map's face culling reads the positions.
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::VERTEX,
         });
         let index_count = indices.len() as u32;
         if indices.is_empty() {
@@ -140,14 +145,6 @@ impl SceneGpu {
             })
             .collect();
         let largest = chunks.iter().map(|(_, n)| *n).max().unwrap_or(1);
-        if triangle_meshes.is_empty() {
-            triangle_meshes.push(0);
-        }
-        let triangle_meshes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("SceneGpu::triangle_meshes"),
-            contents: bytemuck::cast_slice(&triangle_meshes),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
         let sides = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -166,7 +163,6 @@ impl SceneGpu {
             triangle_count,
             lists: CullLists::new(device, largest),
             meshes,
-            triangle_meshes,
             light_sides,
             light_facing: None,
             eye_sides,

@@ -15,7 +15,8 @@
 //! the triangles that can reach its 90-degree pyramid, and each face draws only its list
 //! (`draw_indexed_indirect`). Without it every face draws every triangle: six times the vertex
 //! work, which on llvmpipe is single-threaded and was the largest cost of big scenes under a
-//! point light. Skipped (every face draws all) when the lists would not fit a storage binding.
+//! point light. Skipped (every face draws all) when the lists would not fit a storage binding
+//! (or the triangles one chunk, [`SceneGpu::whole_triangles`], which the culling reads).
 //! The sun's map draws a list the same way (`sun` in shadow_cull.wgsl): the solids' faces toward
 //! the light, less the triangles an earlier frame's pyramid of the same map shows hidden, which
 //! could not win its depth test ([`super::ShadowPyramid`]; the same map, bit for bit).
@@ -38,11 +39,10 @@ bindings! {
     /// The face culling's bind group (shadow_cull.wgsl).
     ShadowCullBindings {
         cull_in: Kind::Storage,
-        vertices: Kind::Storage,
+        tris: Kind::Storage,
         indices: Kind::Storage,
         lists: Kind::StorageRw,
         args: Kind::StorageRw,
-        triangle_meshes: Kind::Storage,
         sides: Kind::Storage,
         pyramid: Kind::Storage,
     }
@@ -133,7 +133,8 @@ pub struct ShadowMap {
     /// The sun's list (`sun` in shadow_cull.wgsl).
     sun_pipeline: wgpu::ComputePipeline,
     cull_uniforms: wgpu::Buffer,
-    /// `None` until bound, or when the lists would not fit a storage binding.
+    /// `None` until bound, or when the lists would not fit a storage binding (or the triangles
+    /// one chunk).
     face_lists: Option<FaceLists>,
 }
 
@@ -217,8 +218,8 @@ impl ShadowMap {
     }
 
     /// Makes the face lists for `geometry` unless they were made for it and `pyramid` (the sun's,
-    /// [`super::ShadowPyramid`]). Without room for them in one storage binding the faces draw
-    /// every triangle.
+    /// [`super::ShadowPyramid`]). Without room for them in one storage binding (or for the
+    /// triangles in one chunk, [`SceneGpu::whole_triangles`]) the faces draw every triangle.
     pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu, pyramid: &wgpu::Buffer) {
         let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
         if self.face_lists.as_ref().is_some_and(|fl| fl.source == geometry.indices && fl.pyramid == *pyramid) {
@@ -226,9 +227,10 @@ impl ShadowMap {
         }
         let index_bytes = geometry.index_count as u64 * 4;
         self.face_lists = None;
-        if geometry.index_count == 0 || 6 * index_bytes > limit || geometry.vertices.size() > limit {
+        let Some(tris) = geometry.whole_triangles().filter(|_| geometry.index_count > 0 && 6 * index_bytes <= limit)
+        else {
             return;
-        }
+        };
         let lists = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ShadowMap::face_lists"),
             size: 6 * index_bytes,
@@ -250,11 +252,10 @@ impl ShadowMap {
         });
         let bind_group = ShadowCullBindings {
             cull_in: self.cull_uniforms.as_entire_binding(),
-            vertices: geometry.vertices.as_entire_binding(),
+            tris: tris.as_entire_binding(),
             indices: geometry.indices.as_entire_binding(),
             lists: lists.as_entire_binding(),
             args: args.as_entire_binding(),
-            triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
             sides: geometry.light_sides.as_entire_binding(),
             pyramid: pyramid.as_entire_binding(),
         }

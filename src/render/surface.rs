@@ -31,10 +31,9 @@ bindings! {
     /// The culling's bind group (surface_cull.wgsl).
     SurfaceCullBindings {
         frame_in: Kind::Storage,
-        vertices: Kind::Storage,
+        tris: Kind::Storage,
         indices: Kind::Storage,
         lists: Kind::StorageRw,
-        triangle_meshes: Kind::Storage,
         sides: Kind::Storage,
         threads: Kind::StorageRw,
         blocks: Kind::StorageRw,
@@ -92,8 +91,8 @@ pub struct Surface {
     cull_layout: wgpu::BindGroupLayout,
     /// surface_cull.wgsl's `mark`, `places` and `compact`.
     cull_pipelines: [wgpu::ComputePipeline; 3],
-    /// `None` until bound, or when the list would not fit a storage binding (then every triangle
-    /// is drawn as it is).
+    /// `None` until bound, or when the list would not fit a storage binding or the triangles one
+    /// chunk ([`SceneGpu::whole_triangles`]; then every triangle is drawn as it is).
     eye_list: Option<EyeList>,
 }
 
@@ -146,9 +145,9 @@ impl Surface {
         self.eye_list = None;
         let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
         let bytes = geometry.index_count as u64 * 4;
-        if geometry.index_count == 0 || bytes > limit || geometry.vertices.size() > limit {
+        let Some(tris) = geometry.whole_triangles().filter(|_| geometry.index_count > 0 && bytes <= limit) else {
             return;
-        }
+        };
         let triangles = geometry.index_count / 3;
         let meshes = geometry.meshes.len() as u32;
         // COPY_SRC: Renderer::read_eye_list, for tests.
@@ -169,10 +168,9 @@ impl Surface {
         let args = buffer("Surface::cull_args", meshes.max(1) as u64 * Self::ARGS_BYTES, wgpu::BufferUsages::INDIRECT);
         let bind_group = SurfaceCullBindings {
             frame_in: frame.as_entire_binding(),
-            vertices: geometry.vertices.as_entire_binding(),
+            tris: tris.as_entire_binding(),
             indices: geometry.indices.as_entire_binding(),
             lists: lists.as_entire_binding(),
-            triangle_meshes: geometry.triangle_meshes.as_entire_binding(),
             sides: geometry.eye_sides.as_entire_binding(),
             threads: threads.as_entire_binding(),
             blocks: blocks.as_entire_binding(),
