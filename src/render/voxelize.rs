@@ -14,7 +14,9 @@
 //! which Cull also reads to size the dispatch): it searches the list for the first only. The
 //! threads of a SIMD group (8 on llvmpipe) share a stretch of the list and take every 8th item of
 //! it, so that at each step their lanes hold neighbouring items (mostly neighbouring planes of one
-//! triangle) and finish their walks over bins together.
+//! triangle) and finish their walks over bins together. Even workgroups take the first half of the
+//! list, odd ones the second (voxelize.wgsl `stretch`), so that a CPU adapter's cores, which run
+//! consecutive workgroups at once, do not OR into the same lines of the grid.
 //!
 //! Per plane only the ray cells its pixels read are kept
 //! ([`crate::epipolar::GridMapping::plane_rays`]): a hit past them sets nothing, a caster before
