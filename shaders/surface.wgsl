@@ -18,10 +18,16 @@
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
+// The eye and the light (`f.light.xyz`) reach the fragments as flat outputs of the vertex stage, so
+// the fragment stage reads no storage buffer: on llvmpipe, reading the two from `frame_in` there
+// cost the classroom's Surface, and the raster work it leaves to the next pass, ~6 ms a frame
+// (session 35; the images the same to the bit).
 struct VsOut {
     @builtin(position) clip: vec4f,
     @location(0) world: vec3f,
     @location(1) albedo: vec3f,
+    @location(2) @interpolate(flat) eye: vec3f,
+    @location(3) @interpolate(flat) light: vec3f,
 }
 
 struct FsOut {
@@ -36,18 +42,19 @@ fn vs_main(@location(0) position: vec3f, @location(1) albedo: vec3f) -> VsOut {
     o.clip = f.view_proj * vec4f(position, 1.0);
     o.world = position;
     o.albedo = albedo;
+    o.eye = f.eye.xyz;
+    o.light = f.light.xyz;
     return o;
 }
 
 @fragment
 fn fs_main(i: VsOut) -> FsOut {
-    f = frame_in;
-    let to_eye = f.eye.xyz - i.world;
+    let to_eye = i.eye - i.world;
     var n = normalize(cross(dpdx(i.world), dpdy(i.world)));
     if (dot(n, to_eye) < 0.0) { n = -n; }
     // Direction toward the light: from the point (point light) or the light's own (directional).
-    var w = f.light.xyz;
-    if (is_point_light()) { w = normalize(f.light.xyz - i.world); }
+    var w = i.light;
+    if (is_point_light()) { w = normalize(i.light - i.world); }
     let cos_i = dot(n, w);
     let back = select(0.0, dot(n, normalize(to_eye)), cos_i < 0.0);
     var o: FsOut;
