@@ -102,9 +102,10 @@ impl SceneGpu {
                 indices.extend(t.iter().map(|&i| base + i));
                 for (k, &i) in t.iter().enumerate() {
                     let p = m.positions[i as usize];
-                    // The first vertex's w: the mesh, for Cull's side test (a float holding an
-                    // integer, exact below 2^24 meshes: past that light_facing keeps all faces;
-                    // its bits as a u32 would be a subnormal, which a GPU may flush to zero).
+                    // The first vertex's w: the mesh, for the side tests of Cull and of the eye's
+                    // and the map's culling (a float holding an integer, exact below 2^24 meshes:
+                    // past that light_facing keeps all faces and whole_triangles gives none; its
+                    // bits as a u32 would be a subnormal, which a GPU may flush to zero).
                     let w = if k == 0 { mesh as f32 } else { 0.0 };
                     tris.push([p.x, p.y, p.z, w]);
                 }
