@@ -642,6 +642,14 @@ impl Measure {
               every point once (after its warm-up), so a slow phase of a shared machine falls on all \
               points alike; a point's time is the median of its frames from all rounds.",
     };
+    pub const VOXELIZE_RUN: Spec = Spec {
+        name: "voxelize-run",
+        unit: "items",
+        min: 1.0,
+        max: 1024.0,
+        doc: "Voxelize's work items a thread takes, and Cull's triangles a thread culls (the renderer's \
+              own choice: 64 on a CPU adapter, 1 on a GPU; Voxelize::items_per_thread).",
+    };
     pub const ROOM: Spec = Spec {
         name: "room",
         unit: "triangles",

@@ -390,3 +390,28 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     let err = fails(&["ab", "--b", missing.to_str().unwrap(), "--size", "16x16"], &[]);
     assert!(err.contains("no-such-folder") && err.contains("not a folder"), "{err}");
 }
+
+/// `epivox ab` without `--b`: B runs A's shaders with its own renderer settings. A Voxelize run
+/// of 3 items sets the same bits (the work list's shape changes nothing), the surfaces' shadows
+/// from the grid instead of the map change the final image, and B's description names the flags;
+/// a run out of its range is named.
+#[test]
+fn ab_times_the_b_sides_settings_against_a() {
+    if !has_adapter() {
+        return;
+    }
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let base = ["ab", "--size", "48x32", "--grid", "128x128x64", "--rounds", "1", "--frames", "1", "--warmup", "0"];
+        let o = epivox(&[&base[..], extra, &["--json"]].concat(), &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice(&o.stdout).expect("stdout is one JSON object")
+    };
+    let j = run(&["--b-voxelize-run", "3"]);
+    assert_eq!(j["scatter"]["same"], true, "{j}");
+    assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.ends_with("with --b-voxelize-run 3")), "{j}");
+    let j = run(&["--surface-shadows", "map", "--b-surface-shadows", "grid"]);
+    assert_eq!(j["final"]["same"], false, "{j}");
+    assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.contains("--b-surface-shadows grid")), "{j}");
+    let err = fails(&["ab", "--b-voxelize-run", "0"], &[]);
+    assert!(err.contains("voxelize-run") && err.contains("1024"), "{err}");
+}

@@ -17,9 +17,10 @@ pub struct AbArgs {
           value_parser = |s: &str| super::parse_count::<usize>(&Measure::ROOM, s),
           help = super::spec_help("Time the bench's procedural room instead of SCENE, at the paper's grid unless --grid", &Measure::ROOM))]
     pub room: Option<usize>,
-    /// The shader folder under test (a copy of shaders/ with an edit).
+    /// The shader folder under test (a copy of shaders/ with an edit) [default: A's folder, to time
+    /// a B that differs only by the --b-* settings, or to see the machine's noise].
     #[arg(long, value_name = "DIR")]
-    pub b: PathBuf,
+    pub b: Option<PathBuf>,
     /// The shader folder to compare it with [default: $EPIVOX_SHADER_DIR, ./shaders, or the
     /// shaders built into the binary].
     #[arg(long, value_name = "DIR")]
@@ -46,9 +47,66 @@ pub struct AbArgs {
     pub rounds: u32,
     #[command(flatten)]
     pub passes: super::PassChoices,
+    #[command(flatten)]
+    pub b_side: BSettings,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// What the B side's renderer does differently from A's besides its shaders: the same choices as
+/// `--scan`, `--surface-shadows` and `--pixels` (which set both sides), for B alone, and the
+/// Voxelize work list's runs. A change to the renderer's settings is then timed against the
+/// current ones in one process, like a shader edit (two binaries in alternating processes mislead
+/// on a shared machine: docs/results.md, session 35).
+#[derive(clap::Args, Default)]
+pub struct BSettings {
+    /// B's --scan.
+    #[arg(id = "b_scan", long = "b-scan", value_enum, value_name = "SCAN")]
+    pub scan: Option<super::ScanBy>,
+    /// B's --surface-shadows.
+    #[arg(id = "b_surface_shadows", long = "b-surface-shadows", value_enum, value_name = "FROM")]
+    pub surface_shadows: Option<super::SurfaceShadows>,
+    /// B's --pixels.
+    #[arg(id = "b_pixels", long = "b-pixels", value_enum, value_name = "PIXELS")]
+    pub pixels: Option<super::Pixels>,
+    #[arg(id = "b_voxelize_run", long = "b-voxelize-run", value_name = "ITEMS",
+          value_parser = |s: &str| super::parse_count::<u32>(&Measure::VOXELIZE_RUN, s),
+          help = super::spec_help("B's Voxelize work items a thread (and Cull's triangles a thread)", &Measure::VOXELIZE_RUN))]
+    pub voxelize_run: Option<u32>,
+}
+
+impl BSettings {
+    /// Sets B's renderer apart from A's, after the choices both sides share.
+    fn apply(&self, renderer: &mut Renderer) {
+        let choices =
+            super::PassChoices { scan: self.scan, surface_shadows: self.surface_shadows, pixels: self.pixels };
+        choices.apply(renderer);
+        if let Some(run) = self.voxelize_run {
+            renderer.set_voxelize_work(run, renderer.voxelize_work().1);
+        }
+    }
+
+    /// The settings given, as the flags that set them (empty when B differs by its shaders alone).
+    fn describe(&self) -> Vec<String> {
+        fn name(v: &impl clap::ValueEnum) -> String {
+            v.to_possible_value().map(|p| p.get_name().to_string()).unwrap_or_default()
+        }
+        let mut flags = Vec::new();
+        if let Some(v) = &self.scan {
+            flags.push(format!("--b-scan {}", name(v)));
+        }
+        if let Some(v) = &self.surface_shadows {
+            flags.push(format!("--b-surface-shadows {}", name(v)));
+        }
+        if let Some(v) = &self.pixels {
+            flags.push(format!("--b-pixels {}", name(v)));
+        }
+        if let Some(run) = self.voxelize_run {
+            flags.push(format!("--b-voxelize-run {run}"));
+        }
+        flags
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum, Debug)]
@@ -70,7 +128,7 @@ pub fn ab(args: AbArgs) -> Result<()> {
     if let Some(g) = args.grid {
         scene.grid = g;
     }
-    for dir in args.a.iter().chain([&args.b]) {
+    for dir in args.a.iter().chain(args.b.iter()) {
         if !dir.is_dir() {
             bail!("{}: not a folder of shaders", dir.display());
         }
@@ -84,7 +142,8 @@ pub fn ab(args: AbArgs) -> Result<()> {
         Ok(r)
     };
     let mut a = side(args.a.as_deref(), "A")?;
-    let mut b = side(Some(&args.b), "B")?;
+    let mut b = side(args.b.as_deref().or(args.a.as_deref()), "B")?;
+    args.b_side.apply(&mut b);
     let method = match args.method {
         AbMethod::Vsv => GpuMethod::Vsv,
         AbMethod::Cartesian => GpuMethod::Cartesian,
@@ -103,7 +162,11 @@ pub fn ab(args: AbArgs) -> Result<()> {
         rounds: args.rounds as usize,
         progress: !args.json,
     };
-    let (a_dir, b_dir) = (shader_folder(&a), shader_folder(&b));
+    let (a_dir, mut b_dir) = (shader_folder(&a), shader_folder(&b));
+    let settings = args.b_side.describe();
+    if !settings.is_empty() {
+        b_dir = format!("{b_dir} with {}", settings.join(" "));
+    }
     if !args.json {
         eprintln!(
             "ab: {} at {w}x{h} ({}, grid {}) on {}, {} rounds of {} frames a side",

@@ -68,8 +68,9 @@ pub enum Command {
     /// Measure error against GPU time for every method and the ray-marching baseline; writes
     /// results.csv, report.md and plots into --out.
     Bench(bench::BenchArgs),
-    /// Time an edited shader folder (--b) against the current one (--a) on one scene: per-pass GPU
-    /// medians of whole frames over interleaved rounds, and whether the images differ.
+    /// Time an edited shader folder (--b) or other renderer settings (--b-*) against the current
+    /// ones (--a) on one scene: per-pass GPU medians of whole frames over interleaved rounds, and
+    /// whether the images differ.
     Ab(ab::AbArgs),
 }
 

@@ -1204,6 +1204,11 @@ impl Renderer {
         self.passes.voxelize.words_per_item = words_per_item.max(1);
     }
 
+    /// Voxelize's work items per thread and words of bins per item ([`Renderer::set_voxelize_work`]).
+    pub fn voxelize_work(&self) -> (u32, u32) {
+        (self.passes.voxelize.items_per_thread, self.passes.voxelize.words_per_item)
+    }
+
     /// The shadow volume of the last frame, `planes x rays x words` words (plane-major: ray
     /// (`plane`, `ray`) starts at [`Grid::ray_offset`]), for the inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
