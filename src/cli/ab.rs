@@ -59,7 +59,7 @@ pub struct AbArgs {
 /// Voxelize work list's runs. A change to the renderer's settings is then timed against the
 /// current ones in one process, like a shader edit (two binaries in alternating processes mislead
 /// on a shared machine: docs/results.md, session 35).
-#[derive(clap::Args, Default)]
+#[derive(clap::Args)]
 pub struct BSettings {
     /// B's --scan.
     #[arg(id = "b_scan", long = "b-scan", value_enum, value_name = "SCAN")]
