@@ -10,9 +10,12 @@
 // control flow (about 2 s a frame for the voxel passes whenever the camera moves). The private
 // copy lets the compiler keep the values in registers instead of reloading them from the buffer
 // in every loop iteration (the march: 2.5x faster on llvmpipe than reading the buffer directly).
-// The exception is Composite's shadow-map matrices: a pixel indexes them once, and copying all
-// six per pixel cost more than the lookups (in the fragment shader that lit the surfaces before,
-// it doubled that pass's time).
+// Copy before the entry point's first branch or loop: llvmpipe (Mesa 22.3) loads a storage value
+// whose address is a constant with one load for the whole SIMD group only outside control flow;
+// inside a branch or a loop (an early `return` puts the rest of the shader inside one) every lane
+// loads it in turn, a loop with a branch per lane. Parameters read there instead cost the
+// classroom's Cull, sun list and Composite ~3 ms a frame (session 36). Fragment shaders never get
+// the single load: they take what they need from the vertex stage (surface.wgsl).
 
 const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717959;

@@ -47,6 +47,11 @@ struct ShadowCull {
 // The sun map's pyramid of block maxima (shadow_pyramid.wgsl), for `sun`.
 @group(0) @binding(6) var<storage, read> pyramid: array<f32>;
 
+// The parameters (and the sun's pyramid matrix) are read once at each entry point, before its
+// first branch: inside a branch or a loop llvmpipe loads a storage value lane by lane even where its
+// address is a constant (common.wgsl, "Parameters"; the classroom's sun list read the 39 floats
+// after its first test, and the frame's map took ~1 ms longer, session 36).
+
 // The four plane values of q for face k (>= 0 inside), with a margin for rounding.
 fn planes(q: vec3f, k: u32) -> vec4f {
     let c = k / 2u;
@@ -61,9 +66,10 @@ fn planes(q: vec3f, k: u32) -> vec4f {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let u = cull_in;
     let t = id.x + id.y * groups.x * 64u;
-    if (t >= cull_in.counts.x) { return; }
-    let l = cull_in.light.xyz;
+    if (t >= u.counts.x) { return; }
+    let l = u.light.xyz;
     let v0 = tris[3u * t];
     let q0 = v0.xyz - l;
     let q1 = tris[3u * t + 1u].xyz - l;
@@ -77,7 +83,7 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
         let outside = planes(q0, k) < vec4f(0.0) & planes(q1, k) < vec4f(0.0) & planes(q2, k) < vec4f(0.0);
         if (any(outside)) { continue; }
         let at = atomicAdd(&args[5u * k], 3u);
-        let base = k * cull_in.counts.y + at;
+        let base = k * u.counts.y + at;
         lists[base] = i0;
         lists[base + 1u] = i1;
         lists[base + 2u] = i2;
@@ -86,16 +92,18 @@ fn main(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
 
 @compute @workgroup_size(64)
 fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let u = cull_in;
+    let pm = pyramid_matrix();
     let t = id.x + id.y * groups.x * 64u;
-    if (t >= cull_in.counts.x) { return; }
+    if (t >= u.counts.x) { return; }
     let v0 = tris[3u * t];
     let p0 = v0.xyz;
     let p1 = tris[3u * t + 1u].xyz;
     let p2 = tris[3u * t + 2u].xyz;
     // A solid's face away from the sun (Cull's test); edge-on faces (dot 0) are kept.
-    if (sides[u32(v0.w)] * dot(cross(p1 - p0, p2 - p0), cull_in.light.xyz) < 0.0) { return; }
+    if (sides[u32(v0.w)] * dot(cross(p1 - p0, p2 - p0), u.light.xyz) < 0.0) { return; }
     // Wholly beyond one side of the map (fitted to the view, ShadowFit): it covers no texel.
-    let m = cull_in.view_proj;
+    let m = u.view_proj;
     let n0 = (m * vec4f(p0, 1.0)).xy;
     let n1 = (m * vec4f(p1, 1.0)).xy;
     let n2 = (m * vec4f(p2, 1.0)).xy;
@@ -104,8 +112,7 @@ fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups
     if (any((n0 > edge) & (n1 > edge) & (n2 > edge)) || any((n0 < -edge) & (n1 < -edge) & (n2 < -edge))) { return; }
     // Only from a pyramid of this very map (a fitted map's earlier view may have had other texel
     // centres, where a hidden triangle could show through a gap between them).
-    let c = cull_in.counts;
-    let pm = pyramid_matrix();
+    let c = u.counts;
     let same = all(pm[0] == m[0]) && all(pm[1] == m[1]) && all(pm[2] == m[2]) && all(pm[3] == m[3]);
     if (same && hidden_in_pyramid(m, f32(c.w), c.z, p0, p1, p2)) { return; }
     let at = atomicAdd(&args[0], 3u);

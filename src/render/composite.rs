@@ -17,7 +17,7 @@ bindings! {
     /// Composite's bind group (composite.wgsl).
     CompositeBindings {
         frame_in: Kind::Storage,
-        shadow: Kind::Storage,
+        shadow_in: Kind::Storage,
         shadow_map: Kind::DepthArray,
         material: Kind::Texture,
         distance: Kind::Texture,

@@ -783,7 +783,7 @@ impl Renderer {
         p.raymarch.bind(d, raymarch);
         let composite = CompositeBindings {
             frame_in: frame(),
-            shadow: shadow(),
+            shadow_in: shadow(),
             shadow_map,
             material: R::TextureView(&t.material),
             distance: R::TextureView(&t.distance),
