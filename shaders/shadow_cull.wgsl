@@ -49,8 +49,8 @@ struct ShadowCull {
 
 // The parameters (and the sun's pyramid matrix) are read once at each entry point, before its
 // first branch: inside a branch or a loop llvmpipe loads a storage value lane by lane even where its
-// address is a constant (common.wgsl, "Parameters"; the classroom's sun list read the 39 floats
-// after its first test, and the frame's map took ~1 ms longer, session 36).
+// address is a constant (common.wgsl, "Parameters"; the classroom's sun list read its 39 floats
+// after its first test: ~1 ms a frame, which llvmpipe's timestamps book to ShadowFit, session 36).
 
 // The four plane values of q for face k (>= 0 inside), with a margin for rounding.
 fn planes(q: vec3f, k: u32) -> vec4f {
