@@ -21,10 +21,14 @@
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
-@group(0) @binding(3) var material: texture_2d<f32>;
-@group(0) @binding(4) var distance: texture_2d<f32>;
-@group(0) @binding(5) var scatter: texture_2d<f32>;
-@group(0) @binding(6) var hdr: texture_storage_2d<rgba32float, write>;
+// The 2x2 filtered test as one comparison sample (Composite::samplers): linear, clamped to the
+// edge; the sun's passes where reference <= depth, the cube's where reference >= depth.
+@group(0) @binding(3) var shadow_sun: sampler_comparison;
+@group(0) @binding(4) var shadow_cube: sampler_comparison;
+@group(0) @binding(5) var material: texture_2d<f32>;
+@group(0) @binding(6) var distance: texture_2d<f32>;
+@group(0) @binding(7) var scatter: texture_2d<f32>;
+@group(0) @binding(8) var hdr: texture_storage_2d<rgba32float, write>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters"). A
 // pixel's lookup read the map's parameters inside its branches, where llvmpipe loads a storage
@@ -46,19 +50,24 @@ fn face_matrix(layer: u32) -> mat4x4f {
     return m;
 }
 
-// Fraction of a 2x2 texel neighbourhood that sees the light.
+// Fraction of a 2x2 texel neighbourhood that sees the light, weighted bilinearly: texel c is lit
+// where s.value <= stored(c) + bias (shadow_lookup.wgsl), which the comparison sampler tests in the
+// map's own depth. Sun: stored = depth * far, so lit where (value - bias) / far <= depth (an empty
+// texel, depth 1, always: the reference is capped at 1). Point light: stored = per_depth / depth,
+// so lit where depth <= per_depth / (value - bias) (an empty texel, depth 0, always; and every
+// texel where value <= bias). The sampler's linear filter blends the four results with the same
+// weights as texel centres at i + 1/2, and clamping to the edge repeats the edge texels.
 fn visibility(p: vec3f, bias: f32) -> f32 {
     let s = shadow_coords(p);
     if (!s.inside) { return 1.0; }
-    let uv = s.uv - 0.5;
-    let base = floor(uv);
-    let fr = uv - base;
-    var lit = vec4f(0.0);
-    for (var k = 0; k < 4; k++) {
-        let o = vec2f(f32(k & 1), f32(k >> 1));
-        lit[k] = select(0.0, 1.0, s.value <= shadow_stored(s, base + o) + bias);
+    let uv = s.uv / shadow.params.x;
+    let d = s.value - bias;
+    if (POINT_LIGHT) {
+        let reference = select(3.0e38, s.per_depth / d, d > 0.0);
+        return textureSampleCompareLevel(shadow_map, shadow_cube, uv, s.layer, reference);
     }
-    return mix(mix(lit.x, lit.y, fr.x), mix(lit.z, lit.w, fr.x), fr.y);
+    let reference = min(d / shadow.params.w, 1.0);
+    return textureSampleCompareLevel(shadow_map, shadow_sun, uv, s.layer, reference);
 }
 
 // Depth bias against shadow acne: a texel of the map covers texel / cos of the surface along the

@@ -19,6 +19,8 @@ bindings! {
         frame_in: Kind::Storage,
         shadow_in: Kind::Storage,
         shadow_map: Kind::DepthArray,
+        shadow_sun: Kind::ComparisonSampler,
+        shadow_cube: Kind::ComparisonSampler,
         material: Kind::Texture,
         distance: Kind::Texture,
         scatter: Kind::Texture,
@@ -30,6 +32,12 @@ pub struct Composite {
     pipelines: SpecialisedCompute<1>,
     layout: wgpu::BindGroupLayout,
     bind_group: Option<wgpu::BindGroup>,
+    /// The shadow map's 2x2 filtered test as one comparison sample (clamped to the edge, linear):
+    /// `shadow_sun` passes where the reference is at most the texel's depth (the sun's map stores
+    /// the distance from a plane beyond the scene), `shadow_cube` where it is at least (the cube's
+    /// reversed depth). One sample where four texel loads cost llvmpipe ~1.6 ms of the classroom's
+    /// Composite (session 36).
+    pub samplers: [wgpu::Sampler; 2],
 }
 
 impl Composite {
@@ -46,7 +54,22 @@ impl Composite {
             ["main"],
             Specialised::LightAndSurfaceShadows,
         );
-        Ok(Composite { pipelines, layout, bind_group: None })
+        let sampler = |label: &str, compare: wgpu::CompareFunction| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(compare),
+                ..Default::default()
+            })
+        };
+        let samplers = [
+            sampler("Composite::shadow_sun", wgpu::CompareFunction::LessEqual),
+            sampler("Composite::shadow_cube", wgpu::CompareFunction::GreaterEqual),
+        ];
+        Ok(Composite { pipelines, layout, bind_group: None, samplers })
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.

@@ -781,10 +781,13 @@ impl Renderer {
             march_in: march.as_entire_binding(),
         };
         p.raymarch.bind(d, raymarch);
+        let samplers = p.composite.samplers.clone();
         let composite = CompositeBindings {
             frame_in: frame(),
             shadow_in: shadow(),
             shadow_map,
+            shadow_sun: R::Sampler(&samplers[0]),
+            shadow_cube: R::Sampler(&samplers[1]),
             material: R::TextureView(&t.material),
             distance: R::TextureView(&t.distance),
             scatter: R::TextureView(&t.scatter_view),
@@ -1367,6 +1370,7 @@ mod binding_tests {
                     Kind::DepthArray
                 }
                 (_, naga::TypeInner::Image { arrayed: true, .. }) => Kind::TextureArray,
+                (_, naga::TypeInner::Sampler { comparison: true }) => Kind::ComparisonSampler,
                 (_, naga::TypeInner::Image { .. }) => Kind::Texture,
                 (space, inner) => panic!("{file}: binding {} has an unexpected kind {space:?} {inner:?}", rb.binding),
             };

@@ -12,8 +12,10 @@ pub enum Kind {
     Texture,
     /// `texture_2d_array<f32>`, not filterable.
     TextureArray,
-    /// `texture_depth_2d_array` (loaded, never sampled or compared).
+    /// `texture_depth_2d_array` (loaded, or sampled with a comparison sampler).
     DepthArray,
+    /// `sampler_comparison`.
+    ComparisonSampler,
     /// `texture_storage_2d<format, write>`.
     StorageTexture(wgpu::TextureFormat),
 }
@@ -33,6 +35,12 @@ impl Kind {
                     multisampled: false,
                 },
                 ..texture_entry(binding, visibility, wgpu::TextureViewDimension::D2Array)
+            },
+            Kind::ComparisonSampler => wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                count: None,
             },
             Kind::StorageTexture(format) => {
                 wgpu::BindGroupLayoutEntry { visibility, ..storage_texture_entry(binding, format) }
