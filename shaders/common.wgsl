@@ -73,7 +73,8 @@ struct Frame {
     table: vec4u,
     // Voxelize's work list (cull.wgsl, voxelize.wgsl): work items per thread, 32-bit words of bins
     // per item, the coarsest shadow-pyramid level Cull may read (0: no test of hidden triangles,
-    // shadow_pyramid.wgsl); w unused.
+    // shadow_pyramid.wgsl); w the coarsest level of the eye's depth pyramid Surface's culling may
+    // read (0: none, surface_cull.wgsl).
     work: vec4u,
     // Where the axis toward the light meets the image, in pixels: whole pixels in xy, the fraction
     // in zw (gamma_of_pixel); x = NO_EPIPOLE (3e38) when the light is not in front of the camera.

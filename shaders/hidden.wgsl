@@ -1,11 +1,13 @@
 // hidden.wgsl: whether the directional shadow map shows a triangle behind nearer surfaces all
 // around it, from the pyramid of its block maxima (shadow_pyramid.wgsl). Imported by Cull (which
 // then does not voxelize the triangle) and by the shadow map's sun list (shadow_cull.wgsl, which
-// then does not draw it: it could not win the depth test at any texel centre it covers).
+// then does not draw it: it could not win the depth test at any texel centre it covers); and, for
+// the pyramid of the eye's depth, by Surface's culling (surface_cull.wgsl, `pyramid_max`).
 //
 // The importing file declares `pyramid: array<f32>`: the view-projection of the map it was made
 // from (PYRAMID_MATRIX_FLOATS floats, column by column), then levels PYRAMID_FIRST_LEVEL to the
-// coarsest, one after the other.
+// coarsest, one after the other, each square (a pyramid of a W x H image is one of max(W, H) per
+// side, its blocks past the image's edge repeating the edge).
 
 // The shadow pyramid's finest level (ShadowPyramid::FIRST_LEVEL): blocks of 4x4 texels.
 const PYRAMID_FIRST_LEVEL: u32 = 2u;
@@ -45,15 +47,20 @@ fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2
     let lo = floor(min(t0, min(t1, t2))) - 1.0;
     let hi = floor(max(t0, max(t1, t2))) + 1.0;
     if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
-    let a = vec2u(lo);
-    let b = vec2u(hi);
-    // The first level whose blocks hold the range in three per side, and where it starts.
+    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
+    // texel centre may round below its vertices' minimum.
+    return pyramid_max(vec2u(lo), vec2u(hi), u32(n), coarsest) < min(c0.z, min(c1.z, c2.z)) - 4e-6;
+}
+
+// The farthest depth over texels [a, b] (inclusive, inside a map of `size` texels per side), read
+// as at most 3x3 texels of the first pyramid level whose blocks hold the range in three per side;
+// 3e38 (nothing is behind it) where even `coarsest`'s blocks are too fine.
+fn pyramid_max(a: vec2u, b: vec2u, size: u32, coarsest: u32) -> f32 {
     var level = PYRAMID_FIRST_LEVEL;
     var offset = PYRAMID_MATRIX_FLOATS;
-    let size = u32(n);
     loop {
         if (all((b >> vec2u(level)) - (a >> vec2u(level)) <= vec2u(2u))) { break; }
-        if (level >= coarsest) { return false; }
+        if (level >= coarsest) { return 3.0e38; }
         let side = (size + (1u << level) - 1u) >> level;
         offset += side * side;
         level++;
@@ -66,11 +73,8 @@ fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2
     let r0 = offset + i.y * side;
     let r1 = offset + mid.y * side;
     let r2 = offset + j.y * side;
-    let far = max(
+    return max(
         max(max(pyramid[r0 + i.x], pyramid[r0 + mid.x]), max(pyramid[r0 + j.x], pyramid[r1 + i.x])),
         max(max(pyramid[r1 + mid.x], pyramid[r1 + j.x]), max(max(pyramid[r2 + i.x], pyramid[r2 + mid.x]), pyramid[r2 + j.x])),
     );
-    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
-    // texel centre may round below its vertices' minimum.
-    return far < min(c0.z, min(c1.z, c2.z)) - 4e-6;
 }

@@ -6,7 +6,9 @@
 // Level 2 reduces 4x4 texels of the map, every further level 2x2 texels of the one before (edge
 // texels repeat where a level has an odd size). Depth grows away from the light (the orthographic
 // map stores s / far, 1 for nothing): a triangle whose nearest depth lies beyond a block's value
-// is behind a nearer surface at every texel centre of the block.
+// is behind a nearer surface at every texel centre of the block. The same reduction makes the
+// pyramid of the eye's depth (Surface's culling, surface_cull.wgsl), of a W x H image as of one
+// max(W, H) texels square: the reads clamp to the image, so the blocks past its edge repeat it.
 
 // ShadowPyramid's per-level parameters (shadow_pyramid.rs, `Level`; a layout test checks them).
 struct Level {
@@ -33,7 +35,7 @@ fn src(l: Level, p: vec2u) -> f32 {
 fn from_map(@builtin(global_invocation_id) id: vec3u) {
     let l = level;
     if (any(id.xy >= vec2u(l.dst_size))) { return; }
-    let last = vec2u(l.src_size - 1u);
+    let last = textureDimensions(shadow_map) - 1u;
     var d = 0.0;
     for (var j = 0u; j < 4u; j++) {
         for (var i = 0u; i < 4u; i++) {

@@ -9,7 +9,10 @@
 //
 // no centre lies in the box and the triangle draws nothing. eps = 1/64 pixel covers the rounding:
 // the rasterizer snaps vertices to 1/256 of a pixel, and this projection rounds apart from the
-// vertex shader's by far less. Nor does a solid's face turned away from the eye where Surface's
+// vertex shader's by far less. Where the box holds at most 3x3 centres, each is tested against the
+// triangle's edges: one outside an edge by more than eps (snapping moves an edge by less) is not
+// covered, and a triangle covering none of them draws nothing (a sliver between the centres: a
+// sixth of the classroom's list at 512x512, session 36). Nor does a solid's face turned away from the eye where Surface's
 // pipeline culls that side (`sides`, per mesh: its winding normal n against the way to the eye,
 //
 //   side * n . (eye - p0) < -t |n| |eye - p0|,   t = FACING_TOL = 1e-3,
@@ -18,6 +21,22 @@
 // about two pixels across by less than that). Scenes of tessellated or scanned meshes hold mostly
 // such triangles (the bench's million-triangle room at 512x512: 61% cover no pixel centre and half
 // of the rest face away, 81% in all; the classroom: 66%).
+//
+// Nor, third, does a triangle behind the depth an earlier frame of this very view left at every
+// pixel centre it covers (f.work.w: the coarsest level of that depth's pyramid of block maxima,
+// shadow_pyramid.wgsl; 0 when there is none). Surface tests depth with `less`, and a triangle's
+// depth z / w is affine across the screen, so its nearest over the pixels it covers is at least
+// its vertices' least:
+//
+//   min(z_i / w_i) - margin > max(depth over the pixels whose centres lie in [lo, hi])
+//
+// makes it fail the depth test at every pixel: the frame draws the same depth and targets without
+// it, and so the next frame's pyramid is the same too. The margin, 1e-6, is a few float steps of
+// depth near 1 for the rasterizer's own rounding. Same view means the same view-projection,
+// eye, image size, geometry and culling switches (Renderer::eye_pyramid_key): the pyramid is made
+// at the end of Surface in a frame of any other view, and read from the next one on (the
+// classroom at 512x512: 28 430 triangles drawn in a view's first frame, 19 504 from its second;
+// Surface 13.0 -> 10.2 ms with the slivers' test below, session 36).
 //
 // The others are compacted in their order, so that Surface draws the same triangles in the same
 // order and its targets are the same, bit for bit (a tie in depth keeps the first drawn): an
@@ -35,6 +54,7 @@
 
 #import common
 #import workgroup_scan
+#import hidden
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 // The scene's triangles, three vec4 vertices each in the order of `indices`, the first one's w its
@@ -59,6 +79,8 @@
 // Per run: DrawIndexedIndirect arguments (index count, instances, first index, base vertex, first
 // instance).
 @group(0) @binding(8) var<storage, read_write> args: array<u32>;
+// The pyramid of the depth an earlier frame of this view left (shadow_pyramid.wgsl), for `hidden`.
+@group(0) @binding(9) var<storage, read> pyramid: array<f32>;
 
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -110,8 +132,50 @@ fn empty(t: u32) -> bool {
         let lo = min(pa, min(pb, pc));
         let hi = max(pa, max(pb, pc));
         empty = misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y);
+        if (!empty) { empty = between_centres(pa, pb, pc, lo, hi); }
+        if (!empty && f.work.w != 0u) {
+            empty = behind_depth(lo, hi, min(a.z / a.w, min(b.z / b.w, c.z / c.w)));
+        }
     }
     return empty;
+}
+
+// Whether a triangle (pixel coordinates pa, pb, pc; box [lo, hi] holding a pixel centre) whose box
+// holds at most 3x3 pixel centres covers none of them: each lies outside one of its edges by more
+// than EPS pixels (the edge function, a cross product, is the edge's length times the distance).
+fn between_centres(pa: vec2f, pb: vec2f, pc: vec2f, lo: vec2f, hi: vec2f) -> bool {
+    let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
+    let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
+    if (any(last - first > vec2f(2.0))) { return false; }
+    // Inside is where all three edge functions have the sign of the triangle's area.
+    let area = (pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x);
+    let s = select(-1.0, 1.0, area > 0.0);
+    let e0 = pb - pa;
+    let e1 = pc - pb;
+    let e2 = pa - pc;
+    let margin = EPS * vec3f(length(e0), length(e1), length(e2));
+    var covered = false;
+    for (var y = first.y; y <= last.y; y += 1.0) {
+        for (var x = first.x; x <= last.x; x += 1.0) {
+            let q = vec2f(x, y) + 0.5;
+            let d = s * vec3f(
+                e0.x * (q.y - pa.y) - e0.y * (q.x - pa.x),
+                e1.x * (q.y - pb.y) - e1.y * (q.x - pb.x),
+                e2.x * (q.y - pc.y) - e2.y * (q.x - pc.x),
+            );
+            covered = covered || all(d >= -margin);
+        }
+    }
+    return !covered;
+}
+
+// Whether the depth pyramid shows every pixel centre in [lo, hi] (pixels; at least one, inside the
+// image: misses_centres said so) nearer than `nearest` by the margin (above).
+fn behind_depth(lo: vec2f, hi: vec2f, nearest: f32) -> bool {
+    let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
+    let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
+    let far = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w);
+    return far < nearest - 1e-6;
 }
 
 const PER_THREAD: u32 = 16u;

@@ -147,3 +147,42 @@ fn a_triangle_through_the_eye_plane_is_kept_though_its_vertices_project_between_
     let differ = with.hdr.pixels.iter().zip(&without.hdr.pixels).filter(|(a, b)| a != b).count();
     assert!(differ > 50, "the triangle covers only {differ} pixels");
 }
+
+/// One frame's images and the number of triangles Surface drew.
+fn frame_and_list(r: &mut Renderer, scene: &Scene, (w, h): (u32, u32)) -> (Image, Image, usize) {
+    let out = r.render(scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let list = r.read_eye_list().unwrap_or_else(|e| panic!("{e}")).expect("no eye list was made");
+    (out.hdr, out.scatter, list.len() / 3)
+}
+
+/// From the second frame of a view on, Surface leaves out the triangles behind the depth the first
+/// frame left at every pixel they cover (`Renderer::eye_occlusion_culling`, the eye's pyramid):
+/// every frame's images are the same to the bit as without it, and a new view (the camera moved,
+/// another image size) draws its first frame without it.
+#[test]
+fn hidden_triangles_are_left_out_from_a_views_second_frame_and_the_images_stay_the_same() {
+    let Some(mut r) = renderer() else { return };
+    let mut scene = epivox::bench::procedural_scene(100_000);
+    scene.grid = epivox::params::Grid { planes: 256, rays: 256, bins: 128, ..Default::default() };
+    // Every frame draws its surfaces (a renderer may otherwise take them over from the frame before).
+    r.reuse_unchanged = false;
+    let mut views = vec![(scene.camera, (160, 120))];
+    let mut moved = scene.camera;
+    moved.eye += (moved.target - moved.eye).normalize() * 0.3 + Vec3::new(0.05, 0.0, 0.0);
+    views.push((moved, (160, 120)));
+    views.push((moved, (150, 120)));
+    for (camera, size) in views {
+        scene.camera = camera;
+        r.eye_occlusion_culling = false;
+        let (hdr, scatter, all) = frame_and_list(&mut r, &scene, size);
+        r.eye_occlusion_culling = true;
+        let frames: Vec<_> = (0..3).map(|_| frame_and_list(&mut r, &scene, size)).collect();
+        for (i, (h, s, _)) in frames.iter().enumerate() {
+            assert!(h.pixels == hdr.pixels && s.pixels == scatter.pixels, "{size:?}: frame {i}'s images differ");
+        }
+        let lists: Vec<usize> = frames.iter().map(|f| f.2).collect();
+        // (The frame without the switch made no pyramid: the first one with it draws every triangle.)
+        assert_eq!(lists[0], all, "{size:?}: a view's first frame left triangles out");
+        assert!(lists[1] < lists[0] && lists[2] == lists[1], "{size:?}: triangles drawn per frame {lists:?}");
+    }
+}

@@ -55,7 +55,9 @@ pub struct FrameUniforms {
     pub table: UVec4,
     /// Voxelize's work list: items per thread and 32-bit words of bins per item (the renderer sets
     /// them per adapter: [`super::Voxelize`]), and the coarsest shadow-pyramid level Cull reads to
-    /// drop triangles hidden from the light (0: no such test; [`super::ShadowPyramid`]); `w` unused.
+    /// drop triangles hidden from the light (0: no such test; [`super::ShadowPyramid`]); `w` the
+    /// coarsest level of the eye's depth pyramid Surface's culling reads (0: none;
+    /// [`super::EyePyramid`]).
     pub work: UVec4,
     /// Where the axis toward the light meets the image, in pixel coordinates (the pixel convention
     /// of [`crate::scene::Camera::pixel_dir_f64`]: pixel p's centre is at p), computed in f64 and

@@ -46,7 +46,7 @@ pub use shadow_fit::{fit_key, FitKey, FitResult, ShadowFit, ShadowFitBindings};
 pub use shadow_map::{
     FaceUniforms, MapDrawing, ShadowCullBindings, ShadowCullUniforms, ShadowMap, ShadowMapBindings, ShadowUniforms,
 };
-pub use shadow_pyramid::{MapInputs, ShadowPyramid, ShadowPyramidBindings};
+pub use shadow_pyramid::{DepthPyramid, EyeInputs, EyePyramid, MapInputs, ShadowPyramid, ShadowPyramidBindings};
 pub use surface::{EyeDrawing, Surface, SurfaceBindings, SurfaceCullBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
 pub use voxelize::{Voxelize, VoxelizeBindings};
@@ -199,6 +199,9 @@ impl FrameKey {
         let mut u = setup.uniforms;
         // What only the passes from Integrate on read (common.wgsl's Frame).
         u.light_power = glam::Vec4::ZERO;
+        // Whether Surface's culling reads the eye's pyramid: the targets are the same either way,
+        // and the frame after a view's first (the first to read it) may take them over.
+        u.work.w = 0;
         u.sigma_s = glam::Vec4::ZERO;
         u.sigma_t = glam::Vec4::ZERO;
         FrameKey {
@@ -269,6 +272,8 @@ struct Targets {
     distance_texture: wgpu::Texture,
     distance: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// The same depth as an array of one layer, for the eye's pyramid.
+    depth_layers: wgpu::TextureView,
     scatter: wgpu::Texture,
     scatter_view: wgpu::TextureView,
     hdr: wgpu::Texture,
@@ -282,6 +287,7 @@ struct Passes {
     shadow_map: ShadowMap,
     ranges: Ranges,
     shadow_pyramid: ShadowPyramid,
+    eye_pyramid: EyePyramid,
     cull: Cull,
     voxelize: Voxelize,
     scan: Scan,
@@ -300,7 +306,8 @@ impl Passes {
                 shadow_fit: ShadowFit::new(d, lib)?,
                 shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 ranges: Ranges::new(d, lib)?,
-                shadow_pyramid: ShadowPyramid::new(d, lib)?,
+                shadow_pyramid: ShadowPyramid::new(d, lib, "ShadowPyramid")?,
+                eye_pyramid: EyePyramid::new(d, lib, "EyePyramid")?,
                 cull: Cull::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib, ctx.info.device_type)?,
                 scan: Scan::new(d, lib)?,
@@ -387,6 +394,12 @@ pub struct Renderer {
     /// whose map had the same inputs (the light, the geometry, the map's size and the view the map
     /// is fitted to): the frame after a change runs without it and reduces its own map at its end.
     pub occlusion_culling: bool,
+    /// Surface leaves out the triangles behind the depth an earlier frame of the same view left
+    /// at every pixel they cover ([`EyePyramid`], surface_cull.wgsl; needs
+    /// [`Renderer::surface_culling`]). The targets are the same, bit for bit; a frame of a new
+    /// view (camera, image size, geometry) runs without it and reduces its depth at the end of
+    /// Surface for the frames after it. On by default; off only to compare, `tests/surface_cull.rs`.
+    pub eye_occlusion_culling: bool,
     /// Directional lights: narrow the shadow map to the rectangle the frame's view segments cover
     /// ([`ShadowFit`]; on by default, off only to compare, `tests/shadow_fit.rs`). The camera then
     /// joins the map's inputs: a camera move draws the sun's map again.
@@ -422,6 +435,9 @@ pub struct Renderer {
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
+    /// The inputs of this frame's eye depth when Surface is to reduce it into the eye's pyramid
+    /// for the frames after it (set by `prepare`).
+    eye_pyramid_to_build: Option<EyeInputs>,
     /// Take the shadow map, the surfaces and the shadow volume from the previous frame when
     /// nothing they depend on changed (`FrameKey`): a frame that only changes the medium's
     /// coefficients, its phase asymmetry or the light's power runs Integrate (or Raymarch) and
@@ -476,8 +492,9 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
+        // (COPY_SRC: the eye's pyramid keeps a copy of the view-projection it was made with.)
         let frame_buffer =
-            uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>(), wgpu::BufferUsages::empty());
+            uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>(), wgpu::BufferUsages::COPY_SRC);
         // The pyramid keeps a copy of the matrix its map was drawn with (ShadowPyramid::record).
         let shadow_uniforms =
             uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>(), wgpu::BufferUsages::COPY_SRC);
@@ -492,12 +509,14 @@ impl Renderer {
             surface_culling: true,
             scan_columns,
             occlusion_culling: true,
+            eye_occlusion_culling: true,
             fit_shadow_map: true,
             grid_shadows: false,
             adaptive_pixels: true,
             prune_plane_rays: true,
             last_fitted: false,
             pyramid_to_build: None,
+            eye_pyramid_to_build: None,
             reuse_unchanged: true,
             drawn: None,
             lib: lib.clone(),
@@ -688,7 +707,8 @@ impl Renderer {
             Surface::DISTANCE,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
         );
-        let depth = target("Renderer::depth", Surface::DEPTH, U::RENDER_ATTACHMENT);
+        // (TEXTURE_BINDING: the eye's pyramid reads it, as an array of one layer.)
+        let depth = target("Renderer::depth", Surface::DEPTH, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
         let written = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
         let scatter = target("Renderer::scatter", Integrate::OUTPUT, written);
         let hdr = target("Renderer::hdr", Composite::OUTPUT, written);
@@ -699,6 +719,11 @@ impl Renderer {
             distance: view(&distance),
             distance_texture: distance,
             depth: view(&depth),
+            depth_layers: depth.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("Renderer::depth_layers"),
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
             scatter_view: view(&scatter),
             scatter,
             hdr_view: view(&hdr),
@@ -748,7 +773,9 @@ impl Renderer {
         let Some(pyramid) = &p.shadow_pyramid.pyramid else { return };
         p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
-        p.surface.bind(d, &self.frame_buffer, &geometry.gpu);
+        p.eye_pyramid.bind(d, &t.depth_layers, t.width.max(t.height));
+        let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
+        p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
@@ -828,9 +855,10 @@ impl Renderer {
             ctx.scoped("binding the passes", || self.rebind())?;
         }
         let (faces, shadow_lookup, face_count) = self.passes.shadow_map.uniforms(scene);
-        let (work, build) = self.frame_work(&setup, &shadow_lookup);
+        let (work, build, eye_build) = self.frame_work(&setup, &shadow_lookup);
         setup.uniforms.work = work;
         self.pyramid_to_build = build;
+        self.eye_pyramid_to_build = eye_build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
         self.write_plane_rays(scene, &setup);
@@ -868,9 +896,9 @@ impl Renderer {
         *written = Some((key, kept as f64 / (grid.planes as f64 * grid.rays as f64)));
     }
 
-    /// The frame's `work` uniforms (Voxelize's list shape and the coarsest pyramid level Cull
-    /// reads, 0 for none) and, when the frame is to reduce its shadow map into a pyramid, the
-    /// map's inputs.
+    /// The frame's `work` uniforms (Voxelize's list shape, the coarsest pyramid level Cull reads
+    /// and the coarsest eye-pyramid level Surface's culling reads, 0 for none) and, when the frame
+    /// is to reduce its shadow map or its eye's depth into a pyramid, their inputs.
     ///
     /// The test of hidden triangles (a directional light's map, pruning on) reads the pyramid a
     /// frame with the same casters and light left, whatever view its map was fitted to: the frame
@@ -878,7 +906,11 @@ impl Renderer {
     /// changed reduces its map at its end, when the map is long drawn (reading it before Cull
     /// would make the frame wait for its rasterization). Cull and the map's own list (every
     /// method's; only from a pyramid of the same matrix) leave the hidden triangles out.
-    fn frame_work(&self, setup: &FrameSetup, shadow: &ShadowUniforms) -> (glam::UVec4, Option<MapInputs>) {
+    fn frame_work(
+        &self,
+        setup: &FrameSetup,
+        shadow: &ShadowUniforms,
+    ) -> (glam::UVec4, Option<MapInputs>, Option<EyeInputs>) {
         // (A frame that draws no map has no pyramid to make.)
         let occlusion = self.prune && self.occlusion_culling && !setup.frame.is_point() && !setup.grid_shadowed();
         let key = match (&self.geometry, occlusion) {
@@ -898,7 +930,18 @@ impl Renderer {
         let levels = if usable { pyramid.bound_coarsest() } else { 0 };
         let v = &self.passes.voxelize;
         let build = if pyramid.built_from == key { None } else { key };
-        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, 0), build)
+        // The eye's: only from a frame of this very view (EyeInputs), made at the end of Surface
+        // in a frame of any other.
+        let eye_key = match &self.geometry {
+            Some(g) if self.surface_culling && self.eye_occlusion_culling => {
+                Some(EyeInputs::new(&setup.uniforms, g.fingerprint, self.back_face_culling))
+            }
+            _ => None,
+        };
+        let eye = &self.passes.eye_pyramid;
+        let eye_levels = if eye_key.is_some() && eye.built_from == eye_key { eye.bound_coarsest() } else { 0 };
+        let eye_build = if eye.built_from == eye_key { None } else { eye_key };
+        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, eye_levels), build, eye_build)
     }
 
     /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
@@ -960,6 +1003,8 @@ impl Renderer {
         // are the same (the camera moved): the map is still in its texture.
         let drawn = self.drawn.take().filter(|_| self.reuse_unchanged);
         let reuse = drawn.as_ref().is_some_and(|(d, _)| *d == key);
+        // (A frame that takes the surfaces over draws no depth to reduce.)
+        let eye_build = self.eye_pyramid_to_build.take().filter(|_| !reuse);
         let map_reused = draws_map
             && !reuse
             && drawn.as_ref().is_some_and(|(d, ran)| d.map == key.map && ran.contains(&Pass::ShadowMap));
@@ -1008,6 +1053,10 @@ impl Renderer {
             let targets = SurfaceTargets { material: &t.material, distance: &t.distance, depth: &t.depth };
             let eye = EyeDrawing { runs: &eye_runs, toward_ccw: eye_ccw, cull: self.surface_culling };
             p.surface.record(&mut f.enc, v, g, targets, eye);
+            if eye_build.is_some() {
+                p.eye_pyramid
+                    .record(&mut f.enc, (&self.frame_buffer, std::mem::offset_of!(FrameUniforms, view_proj) as u64));
+            }
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
             if draws_map && !map_reused {
@@ -1075,7 +1124,7 @@ impl Renderer {
         // For the frames after this one, while its map's inputs stay the same.
         let build = self.pyramid_to_build.take();
         if build.is_some() {
-            p.shadow_pyramid.record(&mut f.enc, &self.shadow_uniforms);
+            p.shadow_pyramid.record(&mut f.enc, (&self.shadow_uniforms, 0));
             f.mark(Pass::ShadowPyramid);
         }
         let done = self.finish(f, setup, v, reused);
@@ -1084,6 +1133,9 @@ impl Renderer {
         if let Ok(info) = &done {
             if build.is_some() {
                 self.passes.shadow_pyramid.built_from = build;
+            }
+            if eye_build.is_some() {
+                self.passes.eye_pyramid.built_from = eye_build;
             }
             let drawn = Pass::BEFORE_VOLUME
                 .into_iter()

@@ -23,6 +23,11 @@
 //!
 //! Directional lights only: the cube map of a point light is not reduced (its Cull keeps every
 //! triangle the other tests keep).
+//!
+//! The same reduction of a depth image makes [`EyePyramid`], of the eye's depth after Surface: a
+//! later frame of the same view ([`EyeInputs`]) leaves out of Surface's draw list the triangles
+//! behind it at every pixel they cover (surface_cull.wgsl). A W x H image's pyramid is one of
+//! max(W, H) texels per side, its blocks past the image repeating the image's edge.
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
@@ -49,7 +54,11 @@ pub struct Level {
     pub dst_offset: u32,
 }
 
-pub struct ShadowPyramid {
+/// The pyramid of block maxima of a depth image, keyed by what the image was drawn from: the sun's
+/// shadow map ([`ShadowPyramid`]) or the eye's depth ([`EyePyramid`]).
+pub struct DepthPyramid<K> {
+    /// The wgpu objects' label prefix ("ShadowPyramid", "EyePyramid").
+    name: &'static str,
     from_map: wgpu::ComputePipeline,
     from_level: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
@@ -57,11 +66,45 @@ pub struct ShadowPyramid {
     /// then levels [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the
     /// other (hidden.wgsl computes the same offsets from the map's size).
     pub pyramid: Option<wgpu::Buffer>,
-    /// The map size the pyramid and its bind groups were made for, and one bind group per level.
-    bound: Option<(u32, Vec<(wgpu::BindGroup, u32)>)>,
+    /// What the pyramid and its bind groups were made for.
+    bound: Option<Bound>,
     /// What the map the pyramid holds was drawn from, once built: a later frame whose map has the
     /// same inputs draws the same map, and Cull reads the pyramid as it is.
-    pub built_from: Option<MapInputs>,
+    pub built_from: Option<K>,
+}
+
+/// The depth image a pyramid is bound to: its size (texels per side, or the larger side), its
+/// view, and per level a bind group and the level's texels per side.
+struct Bound {
+    size: u32,
+    view: wgpu::TextureView,
+    groups: Vec<(wgpu::BindGroup, u32)>,
+}
+
+/// The sun's shadow map's pyramid, for Cull and the map's own draw list.
+pub type ShadowPyramid = DepthPyramid<MapInputs>;
+
+/// The eye's depth's pyramid, for Surface's draw list.
+pub type EyePyramid = DepthPyramid<EyeInputs>;
+
+/// What the eye's depth is drawn from, compared bit for bit: the view-projection, the eye, the
+/// image's size (`Frame`'s `view_proj`, `eye` and `image`), the geometry (its fingerprint) and
+/// whether solids draw one side. A frame with the same inputs draws the same depth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EyeInputs {
+    view: [u8; 88],
+    geometry: u64,
+    one_sided: bool,
+}
+
+impl EyeInputs {
+    pub fn new(u: &super::FrameUniforms, geometry: u64, one_sided: bool) -> EyeInputs {
+        let mut view = [0u8; 88];
+        view[..64].copy_from_slice(bytemuck::bytes_of(&u.view_proj));
+        view[64..80].copy_from_slice(bytemuck::bytes_of(&u.eye));
+        view[80..].copy_from_slice(bytemuck::bytes_of(&[u.image.x, u.image.y]));
+        EyeInputs { view, geometry, one_sided }
+    }
 }
 
 /// The inputs of a directional shadow map, compared bit for bit: the scene's geometry (its
@@ -88,7 +131,7 @@ impl MapInputs {
     }
 }
 
-impl ShadowPyramid {
+impl<K> DepthPyramid<K> {
     /// The finest level made, blocks of 4x4 texels (cull.wgsl's `PYRAMID_FIRST_LEVEL`). Level 1
     /// would drop 0.4% more of the classroom's work items (1.295 M against 1.289 M), not worth its
     /// million threads; level 3 1.2% fewer.
@@ -100,12 +143,14 @@ impl ShadowPyramid {
     /// `PYRAMID_MATRIX_FLOATS`).
     pub const MATRIX_FLOATS: u32 = 16;
 
-    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary) -> Result<ShadowPyramid, GpuError> {
+    /// `name` prefixes the wgpu objects' labels.
+    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary, name: &'static str) -> Result<DepthPyramid<K>, GpuError> {
         let module = lib.module(device, "shadow_pyramid.wgsl")?;
-        let layout = ShadowPyramidBindings::layout(device, "ShadowPyramid::layout", wgpu::ShaderStages::COMPUTE);
-        Ok(ShadowPyramid {
-            from_map: compute_pipeline(device, "ShadowPyramid::from_map", &module, "from_map", &layout),
-            from_level: compute_pipeline(device, "ShadowPyramid::from_level", &module, "from_level", &layout),
+        let layout = ShadowPyramidBindings::layout(device, &format!("{name}::layout"), wgpu::ShaderStages::COMPUTE);
+        Ok(DepthPyramid {
+            name,
+            from_map: compute_pipeline(device, &format!("{name}::from_map"), &module, "from_map", &layout),
+            from_level: compute_pipeline(device, &format!("{name}::from_level"), &module, "from_level", &layout),
             layout,
             pyramid: None,
             bound: None,
@@ -140,10 +185,11 @@ impl ShadowPyramid {
         out
     }
 
-    /// Binds the shadow map; the pyramid and its bind groups are remade when the map's size
-    /// changed (a map of the same size is the same texture: a new one comes with new passes).
+    /// Binds the depth image (`size` texels per side, or the larger side of a W x H image); the
+    /// bind groups are remade for another image, the pyramid for another size (what it holds
+    /// stays valid for the inputs it was built from, whichever texture held them).
     pub fn bind(&mut self, device: &wgpu::Device, map_view: &wgpu::TextureView, size: u32) {
-        if self.bound.as_ref().is_some_and(|(s, _)| *s == size) {
+        if self.bound.as_ref().is_some_and(|b| b.size == size && b.view == *map_view) {
             return;
         }
         let params = Self::level_params(size);
@@ -151,7 +197,7 @@ impl ShadowPyramid {
         if self.pyramid.as_ref().is_none_or(|b| b.size() != floats as u64 * 4) {
             self.built_from = None;
             self.pyramid = Some(device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("ShadowPyramid::pyramid"),
+                label: Some(&format!("{}::pyramid", self.name)),
                 size: floats as u64 * 4,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
@@ -166,7 +212,7 @@ impl ShadowPyramid {
                 let level = wgpu::util::DeviceExt::create_buffer_init(
                     device,
                     &wgpu::util::BufferInitDescriptor {
-                        label: Some(&format!("ShadowPyramid::level{}", i + 1)),
+                        label: Some(&format!("{}::level{}", self.name, i + 1)),
                         contents: bytemuck::bytes_of(p),
                         usage: wgpu::BufferUsages::STORAGE,
                     },
@@ -176,21 +222,21 @@ impl ShadowPyramid {
                     pyramid: pyramid.as_entire_binding(),
                     level: level.as_entire_binding(),
                 };
-                (b.bind(device, &format!("ShadowPyramid::bind_group{}", i + 1), &self.layout), p.dst_size)
+                (b.bind(device, &format!("{}::bind_group{}", self.name, i + 1), &self.layout), p.dst_size)
             })
             .collect();
-        self.bound = Some((size, groups));
+        self.bound = Some(Bound { size, view: map_view.clone(), groups });
     }
 
-    /// Reduces the map, level by level, after the view-projection it was drawn with (the first
-    /// matrix of `shadow_uniforms`, the lookups' `ShadowFaces`, which holds the fitted one).
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, shadow_uniforms: &wgpu::Buffer) {
-        let (Some((_, groups)), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
-        encoder.copy_buffer_to_buffer(shadow_uniforms, 0, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("ShadowPyramid::pass"),
-            timestamp_writes: None,
-        });
+    /// Reduces the map, level by level, after the view-projection it was drawn with (`matrix`: a
+    /// buffer and the offset of the matrix in it; for the sun's map the first matrix of the
+    /// lookups' `ShadowFaces`, which holds the fitted one).
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, matrix: (&wgpu::Buffer, u64)) {
+        let (Some(Bound { groups, .. }), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
+        encoder.copy_buffer_to_buffer(matrix.0, matrix.1, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
+        let label = format!("{}::pass", self.name);
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(&label), timestamp_writes: None });
         for (i, (bind_group, size)) in groups.iter().enumerate() {
             pass.set_pipeline(if i == 0 { &self.from_map } else { &self.from_level });
             pass.set_bind_group(0, bind_group, &[]);
@@ -201,7 +247,7 @@ impl ShadowPyramid {
     /// The coarsest level bound, which Cull's test reads up to (0: none, before
     /// [`ShadowPyramid::bind`] or for a map too small).
     pub fn bound_coarsest(&self) -> u32 {
-        self.bound.as_ref().map_or(0, |(size, _)| Self::coarsest(*size))
+        self.bound.as_ref().map_or(0, |b| Self::coarsest(b.size))
     }
 }
 

@@ -39,6 +39,7 @@ bindings! {
         blocks: Kind::StorageRw,
         runs: Kind::Storage,
         args: Kind::StorageRw,
+        pyramid: Kind::Storage,
     }
 }
 
@@ -54,9 +55,11 @@ pub struct EyeDrawing<'a> {
 
 /// The eye's draw list for one scene's geometry (surface_cull.wgsl).
 struct EyeList {
-    /// The scene index buffer and the frame parameters it was made from (remade when they change).
+    /// The scene index buffer, the frame parameters and the eye's depth pyramid it was made from
+    /// (remade when they change).
     source: wgpu::Buffer,
     frame: wgpu::Buffer,
+    pyramid: wgpu::Buffer,
     /// The scene's indices without the triangles that would draw nothing, in their order.
     lists: wgpu::Buffer,
     /// Per block of [`Surface::CULL_BLOCK`] triangles, the kept ones before it, then the total.
@@ -135,11 +138,16 @@ impl Surface {
     }
 
     /// (Re)binds the inputs; called when the resources change. The eye's draw list is remade
-    /// only for another scene (or frame buffer).
-    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &SceneGpu) {
+    /// only for another scene (or frame buffer, or eye pyramid: [`super::EyePyramid`], which its
+    /// culling reads).
+    pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &SceneGpu, pyramid: &wgpu::Buffer) {
         let b = SurfaceBindings { frame_in: frame.as_entire_binding() };
         self.bind_group = Some(b.bind(device, "Surface::bind_group", &self.layout));
-        if self.eye_list.as_ref().is_some_and(|l| l.source == geometry.indices && l.frame == *frame) {
+        if self
+            .eye_list
+            .as_ref()
+            .is_some_and(|l| l.source == geometry.indices && l.frame == *frame && l.pyramid == *pyramid)
+        {
             return;
         }
         self.eye_list = None;
@@ -176,11 +184,13 @@ impl Surface {
             blocks: blocks.as_entire_binding(),
             runs: runs.as_entire_binding(),
             args: args.as_entire_binding(),
+            pyramid: pyramid.as_entire_binding(),
         }
         .bind(device, "Surface::cull_bind_group", &self.cull_layout);
         self.eye_list = Some(EyeList {
             source: geometry.indices.clone(),
             frame: frame.clone(),
+            pyramid: pyramid.clone(),
             lists,
             blocks,
             runs,
@@ -298,7 +308,8 @@ impl Surface {
             color_attachments: &[color(material, 0.0), color(distance, -1.0)],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                // Stored: the eye's pyramid reduces it for the frames after this one.
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
             timestamp_writes: None,
