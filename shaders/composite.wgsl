@@ -36,20 +36,6 @@
 var<private> f: Frame;
 var<private> shadow: ShadowFaces;
 
-// The face's matrix (shadow_lookup.wgsl), picked from the private copy with constant indices only,
-// as the march does: a private array indexed per lane is a gather from memory on llvmpipe.
-fn face_matrix(layer: u32) -> mat4x4f {
-    var m = shadow.view_proj[0];
-    if (POINT_LIGHT) {
-        if (layer == 1u) { m = shadow.view_proj[1]; }
-        if (layer == 2u) { m = shadow.view_proj[2]; }
-        if (layer == 3u) { m = shadow.view_proj[3]; }
-        if (layer == 4u) { m = shadow.view_proj[4]; }
-        if (layer == 5u) { m = shadow.view_proj[5]; }
-    }
-    return m;
-}
-
 // Fraction of a 2x2 texel neighbourhood that sees the light, weighted bilinearly: texel c is lit
 // where s.value <= stored(c) + bias (shadow_lookup.wgsl), which the comparison sampler tests in the
 // map's own depth. Sun: stored = depth * far, so lit where (value - bias) / far <= depth (an empty

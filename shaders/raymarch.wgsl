@@ -47,21 +47,6 @@ var<private> f: Frame;
 var<private> shadow: ShadowFaces;
 var<private> march: March;
 
-// The face's matrix (shadow_lookup.wgsl), picked from the private copy with constant indices
-// only: an index that differs between the lanes of a SIMD group would make the private array a
-// gather from memory on llvmpipe at every step (point lights: the march ~10% faster).
-fn face_matrix(layer: u32) -> mat4x4f {
-    var m = shadow.view_proj[0];
-    if (POINT_LIGHT) {
-        if (layer == 1u) { m = shadow.view_proj[1]; }
-        if (layer == 2u) { m = shadow.view_proj[2]; }
-        if (layer == 3u) { m = shadow.view_proj[3]; }
-        if (layer == 4u) { m = shadow.view_proj[4]; }
-        if (layer == 5u) { m = shadow.view_proj[5]; }
-    }
-    return m;
-}
-
 // 1 when the light reaches p: one nearest-texel lookup.
 fn lit(p: vec3f) -> f32 {
     let s = shadow_coords(p);
