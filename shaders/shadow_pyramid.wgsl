@@ -55,3 +55,13 @@ fn from_level(@builtin(global_invocation_id) id: vec3u) {
     let d = max(max(src(l, a), src(l, vec2u(b.x, a.y))), max(src(l, vec2u(a.x, b.y)), src(l, b)));
     pyramid[l.dst_offset + id.y * l.dst_size + id.x] = d;
 }
+
+// The image itself, for the eye's pyramid (EyePyramid), after its levels: `whole_image` copies the
+// W x H depth (src_size x dst_size in its Level) from dst_offset on, row by row, for Surface's
+// culling to read single pixels (surface_cull.wgsl, small triangles).
+@compute @workgroup_size(8, 8)
+fn whole_image(@builtin(global_invocation_id) id: vec3u) {
+    let l = level;
+    if (any(id.xy >= vec2u(l.src_size, l.dst_size))) { return; }
+    pyramid[l.dst_offset + id.y * l.src_size + id.x] = textureLoad(shadow_map, id.xy, 0, 0);
+}

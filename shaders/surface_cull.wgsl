@@ -12,7 +12,7 @@
 // vertex shader's by far less. Where the box holds at most 3x3 centres, each is tested against the
 // triangle's edges: one outside an edge by more than eps (snapping moves an edge by less) is not
 // covered, and a triangle covering none of them draws nothing (a sliver between the centres: a
-// sixth of the classroom's list at 512x512, session 36). Nor does a solid's face turned away from the eye where Surface's
+// fifth of the classroom's list at 512x512, session 36). Nor does a solid's face turned away from the eye where Surface's
 // pipeline culls that side (`sides`, per mesh: its winding normal n against the way to the eye,
 //
 //   side * n . (eye - p0) < -t |n| |eye - p0|,   t = FACING_TOL = 1e-3,
@@ -31,12 +31,15 @@
 //   min(z_i / w_i) - margin > max(depth over the pixels whose centres lie in [lo, hi])
 //
 // makes it fail the depth test at every pixel: the frame draws the same depth and targets without
-// it, and so the next frame's pyramid is the same too. The margin, 1e-6, is a few float steps of
-// depth near 1 for the rasterizer's own rounding. Same view means the same view-projection,
-// eye, image size, geometry and culling switches (Renderer::eye_pyramid_key): the pyramid is made
-// at the end of Surface in a frame of any other view, and read from the next one on (the
-// classroom at 512x512: 28 430 triangles drawn in a view's first frame, 19 504 from its second;
-// Surface 13.0 -> 10.2 ms with the slivers' test below, session 36).
+// it, and so the next frame's pyramid is the same too. A small triangle (at most 3x3 centres in
+// its box) is tested pixel by pixel instead, against the depth itself, which the pyramid keeps
+// after its levels: only at the centres it covers (`shows_a_centre`). The margin, 1e-6, is a few
+// float steps of depth near 1 for the rasterizer's own rounding. Same view means the same
+// view-projection, eye, image size, geometry and one-sided solids (EyeInputs): the pyramid is
+// made at the end of Surface in a frame of any other view, and read from the next one on (the
+// classroom at 512x512: 28 430 triangles drawn in a view's first frame, 19 504 from its second
+// with the blocks alone, 15 885 with the small triangles' pixels; Surface 13.1 -> 10.3 -> 10.0 ms,
+// session 36).
 //
 // The others are compacted in their order, so that Surface draws the same triangles in the same
 // order and its targets are the same, bit for bit (a tie in depth keeps the first drawn): an
@@ -132,21 +135,26 @@ fn empty(t: u32) -> bool {
         let lo = min(pa, min(pb, pc));
         let hi = max(pa, max(pb, pc));
         empty = misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y);
-        if (!empty) { empty = between_centres(pa, pb, pc, lo, hi); }
-        if (!empty && f.work.w != 0u) {
-            empty = behind_depth(lo, hi, min(a.z / a.w, min(b.z / b.w, c.z / c.w)));
+        if (!empty) {
+            let nearest = min(a.z / a.w, min(b.z / b.w, c.z / c.w));
+            let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
+            let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
+            if (all(last - first <= vec2f(2.0))) {
+                empty = !shows_a_centre(pa, pb, pc, first, last, nearest);
+            } else if (f.work.w != 0u) {
+                empty = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w) < nearest - 1e-6;
+            }
         }
     }
     return empty;
 }
 
-// Whether a triangle (pixel coordinates pa, pb, pc; box [lo, hi] holding a pixel centre) whose box
-// holds at most 3x3 pixel centres covers none of them: each lies outside one of its edges by more
-// than EPS pixels (the edge function, a cross product, is the edge's length times the distance).
-fn between_centres(pa: vec2f, pb: vec2f, pc: vec2f, lo: vec2f, hi: vec2f) -> bool {
-    let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
-    let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
-    if (any(last - first > vec2f(2.0))) { return false; }
+// Whether a small triangle (pixel coordinates pa, pb, pc; the pixel centres first..last of its box,
+// at most 3x3) shows at one of them: it covers the centre, unless the centre lies outside one of
+// its edges by more than EPS pixels (the edge function, a cross product, is the edge's length
+// times the distance), and, with an earlier frame's depth of this view (f.work.w), that depth
+// there is not nearer than `nearest` by the margin (above).
+fn shows_a_centre(pa: vec2f, pb: vec2f, pc: vec2f, first: vec2f, last: vec2f, nearest: f32) -> bool {
     // Inside is where all three edge functions have the sign of the triangle's area.
     let area = (pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x);
     let s = select(-1.0, 1.0, area > 0.0);
@@ -154,7 +162,8 @@ fn between_centres(pa: vec2f, pb: vec2f, pc: vec2f, lo: vec2f, hi: vec2f) -> boo
     let e1 = pc - pb;
     let e2 = pa - pc;
     let margin = EPS * vec3f(length(e0), length(e1), length(e2));
-    var covered = false;
+    let depths = f.work.w != 0u;
+    var shows = false;
     for (var y = first.y; y <= last.y; y += 1.0) {
         for (var x = first.x; x <= last.x; x += 1.0) {
             let q = vec2f(x, y) + 0.5;
@@ -163,19 +172,24 @@ fn between_centres(pa: vec2f, pb: vec2f, pc: vec2f, lo: vec2f, hi: vec2f) -> boo
                 e1.x * (q.y - pb.y) - e1.y * (q.x - pb.x),
                 e2.x * (q.y - pc.y) - e2.y * (q.x - pc.x),
             );
-            covered = covered || all(d >= -margin);
+            if (all(d >= -margin)) {
+                shows = shows || !depths || !(pyramid[image_start + u32(y) * f.image.x + u32(x)] < nearest - 1e-6);
+            }
         }
     }
-    return !covered;
+    return shows;
 }
 
-// Whether the depth pyramid shows every pixel centre in [lo, hi] (pixels; at least one, inside the
-// image: misses_centres said so) nearer than `nearest` by the margin (above).
-fn behind_depth(lo: vec2f, hi: vec2f, nearest: f32) -> bool {
-    let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
-    let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
-    let far = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w);
-    return far < nearest - 1e-6;
+// Where the eye's pyramid holds the image itself, after its levels (EyePyramid, made with it).
+var<private> image_start: u32;
+
+fn whole_image_start(size: u32, coarsest: u32) -> u32 {
+    var offset = PYRAMID_MATRIX_FLOATS;
+    for (var level = PYRAMID_FIRST_LEVEL; level <= coarsest; level++) {
+        let side = (size + (1u << level) - 1u) >> level;
+        offset += side * side;
+    }
+    return offset;
 }
 
 const PER_THREAD: u32 = 16u;
@@ -189,6 +203,7 @@ fn triangle_count() -> u32 {
 @compute @workgroup_size(64)
 fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u, @builtin(local_invocation_index) lid: u32) {
     f = frame_in;
+    image_start = whole_image_start(max(f.image.x, f.image.y), f.work.w);
     let block = wg.x + wg.y * groups.x;
     let n = triangle_count();
     // Workgroups past the last block (the dispatch's second row) have nothing to do; the test is

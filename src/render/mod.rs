@@ -306,8 +306,8 @@ impl Passes {
                 shadow_fit: ShadowFit::new(d, lib)?,
                 shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
                 ranges: Ranges::new(d, lib)?,
-                shadow_pyramid: ShadowPyramid::new(d, lib, "ShadowPyramid")?,
-                eye_pyramid: EyePyramid::new(d, lib, "EyePyramid")?,
+                shadow_pyramid: ShadowPyramid::new(d, lib, "ShadowPyramid", false)?,
+                eye_pyramid: EyePyramid::new(d, lib, "EyePyramid", true)?,
                 cull: Cull::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib, ctx.info.device_type)?,
                 scan: Scan::new(d, lib)?,
@@ -769,11 +769,11 @@ impl Renderer {
         use wgpu::BindingResource as R;
         let frame = || self.frame_buffer.as_entire_binding();
         let shadow = || self.shadow_uniforms.as_entire_binding();
-        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, p.shadow_map.size);
+        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, (p.shadow_map.size, p.shadow_map.size));
         let Some(pyramid) = &p.shadow_pyramid.pyramid else { return };
         p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
-        p.eye_pyramid.bind(d, &t.depth_layers, t.width.max(t.height));
+        p.eye_pyramid.bind(d, &t.depth_layers, (t.width, t.height));
         let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);

@@ -27,7 +27,8 @@
 //! The same reduction of a depth image makes [`EyePyramid`], of the eye's depth after Surface: a
 //! later frame of the same view ([`EyeInputs`]) leaves out of Surface's draw list the triangles
 //! behind it at every pixel they cover (surface_cull.wgsl). A W x H image's pyramid is one of
-//! max(W, H) texels per side, its blocks past the image repeating the image's edge.
+//! max(W, H) texels per side, its blocks past the image repeating the image's edge; the eye's also
+//! keeps the image itself after its levels (`whole`), for the small triangles' pixel-by-pixel test.
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::gpu::{GpuError, ShaderLibrary};
@@ -61,6 +62,8 @@ pub struct DepthPyramid<K> {
     name: &'static str,
     from_map: wgpu::ComputePipeline,
     from_level: wgpu::ComputePipeline,
+    /// With the image itself after the levels ([`DepthPyramid::new`]'s `whole`).
+    whole_image: Option<wgpu::ComputePipeline>,
     layout: wgpu::BindGroupLayout,
     /// The view-projection of the map it was made from ([`ShadowPyramid::MATRIX_FLOATS`] floats),
     /// then levels [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the
@@ -79,6 +82,8 @@ struct Bound {
     size: u32,
     view: wgpu::TextureView,
     groups: Vec<(wgpu::BindGroup, u32)>,
+    /// The image's own copy: its bind group and its width and height.
+    whole: Option<(wgpu::BindGroup, (u32, u32))>,
 }
 
 /// The sun's shadow map's pyramid, for Cull and the map's own draw list.
@@ -143,14 +148,22 @@ impl<K> DepthPyramid<K> {
     /// `PYRAMID_MATRIX_FLOATS`).
     pub const MATRIX_FLOATS: u32 = 16;
 
-    /// `name` prefixes the wgpu objects' labels.
-    pub fn new(device: &wgpu::Device, lib: &ShaderLibrary, name: &'static str) -> Result<DepthPyramid<K>, GpuError> {
+    /// `name` prefixes the wgpu objects' labels; `whole` keeps the image itself after the levels
+    /// (the eye's, whose small triangles Surface's culling tests pixel by pixel).
+    pub fn new(
+        device: &wgpu::Device,
+        lib: &ShaderLibrary,
+        name: &'static str,
+        whole: bool,
+    ) -> Result<DepthPyramid<K>, GpuError> {
         let module = lib.module(device, "shadow_pyramid.wgsl")?;
         let layout = ShadowPyramidBindings::layout(device, &format!("{name}::layout"), wgpu::ShaderStages::COMPUTE);
         Ok(DepthPyramid {
             name,
             from_map: compute_pipeline(device, &format!("{name}::from_map"), &module, "from_map", &layout),
             from_level: compute_pipeline(device, &format!("{name}::from_level"), &module, "from_level", &layout),
+            whole_image: whole
+                .then(|| compute_pipeline(device, &format!("{name}::whole_image"), &module, "whole_image", &layout)),
             layout,
             pyramid: None,
             bound: None,
@@ -185,15 +198,25 @@ impl<K> DepthPyramid<K> {
         out
     }
 
-    /// Binds the depth image (`size` texels per side, or the larger side of a W x H image); the
-    /// bind groups are remade for another image, the pyramid for another size (what it holds
-    /// stays valid for the inputs it was built from, whichever texture held them).
-    pub fn bind(&mut self, device: &wgpu::Device, map_view: &wgpu::TextureView, size: u32) {
+    /// Binds the depth image (`dims`: its width and height; the levels are those of a square of
+    /// the larger side); the bind groups are remade for another image, the pyramid for another
+    /// size (what it holds stays valid for the inputs it was built from, whichever texture held
+    /// them).
+    pub fn bind(&mut self, device: &wgpu::Device, map_view: &wgpu::TextureView, dims: (u32, u32)) {
+        let size = dims.0.max(dims.1);
         if self.bound.as_ref().is_some_and(|b| b.size == size && b.view == *map_view) {
             return;
         }
         let params = Self::level_params(size);
-        let floats = params.last().map_or(Self::MATRIX_FLOATS, |l| l.dst_offset + l.dst_size * l.dst_size);
+        let levels_end = params.last().map_or(Self::MATRIX_FLOATS, |l| l.dst_offset + l.dst_size * l.dst_size);
+        // The image's own copy: its width and height in a Level's sizes (shadow_pyramid.wgsl).
+        let whole = self.whole_image.is_some().then_some(Level {
+            src_size: dims.0,
+            dst_size: dims.1,
+            src_offset: 0,
+            dst_offset: levels_end,
+        });
+        let floats = levels_end + whole.map_or(0, |_| dims.0 * dims.1);
         if self.pyramid.as_ref().is_none_or(|b| b.size() != floats as u64 * 4) {
             self.built_from = None;
             self.pyramid = Some(device.create_buffer(&wgpu::BufferDescriptor {
@@ -205,8 +228,9 @@ impl<K> DepthPyramid<K> {
         }
         let Some(pyramid) = &self.pyramid else { return };
         // One storage buffer per level: its parameters never change while the map keeps its size.
-        let groups = params
+        let mut groups: Vec<(wgpu::BindGroup, u32)> = params
             .iter()
+            .chain(whole.iter())
             .enumerate()
             .map(|(i, p)| {
                 let level = wgpu::util::DeviceExt::create_buffer_init(
@@ -225,14 +249,15 @@ impl<K> DepthPyramid<K> {
                 (b.bind(device, &format!("{}::bind_group{}", self.name, i + 1), &self.layout), p.dst_size)
             })
             .collect();
-        self.bound = Some(Bound { size, view: map_view.clone(), groups });
+        let whole = whole.and_then(|_| groups.pop()).map(|(g, _)| (g, dims));
+        self.bound = Some(Bound { size, view: map_view.clone(), groups, whole });
     }
 
     /// Reduces the map, level by level, after the view-projection it was drawn with (`matrix`: a
     /// buffer and the offset of the matrix in it; for the sun's map the first matrix of the
     /// lookups' `ShadowFaces`, which holds the fitted one).
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, matrix: (&wgpu::Buffer, u64)) {
-        let (Some(Bound { groups, .. }), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
+        let (Some(Bound { groups, whole, .. }), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
         encoder.copy_buffer_to_buffer(matrix.0, matrix.1, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
         let label = format!("{}::pass", self.name);
         let mut pass =
@@ -241,6 +266,11 @@ impl<K> DepthPyramid<K> {
             pass.set_pipeline(if i == 0 { &self.from_map } else { &self.from_level });
             pass.set_bind_group(0, bind_group, &[]);
             pass.dispatch_workgroups(size.div_ceil(8), size.div_ceil(8), 1);
+        }
+        if let (Some(pipeline), Some((bind_group, (w, h)))) = (&self.whole_image, whole) {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
     }
 
