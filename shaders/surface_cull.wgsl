@@ -26,19 +26,21 @@
 // pixel centre it covers (f.work.w: the coarsest level of that depth's pyramid of block maxima,
 // shadow_pyramid.wgsl; 0 when there is none). Surface tests depth with `less`, and a triangle's
 // depth z / w is affine across the screen, so its nearest over the pixels it covers is at least
-// its vertices' least:
+// its vertices' least, up to a margin (below):
 //
 //   min(z_i / w_i) - margin > max(depth over the pixels whose centres lie in [lo, hi])
 //
 // makes it fail the depth test at every pixel: the frame draws the same depth and targets without
 // it, and so the next frame's pyramid is the same too. A small triangle (at most 3x3 centres in
 // its box) is tested pixel by pixel instead, against the depth itself, which the pyramid keeps
-// after its levels: only at the centres it covers (`shows_a_centre`). The margin, 1e-6, is a few
-// float steps of depth near 1 for the rasterizer's own rounding. Same view means the same
+// after its levels: only at the centres it covers (`shows_a_centre`). The margin (`depth_margin`):
+// the rasterizer takes the depth's plane from the vertices as they are but its coverage from the
+// vertices snapped to 1/256 pixel, so at a covered centre just past an edge the plane runs on
+// below the vertices' least by its slope times the snapping; plus 1e-6 for rounding. Same view means the same
 // view-projection, eye, image size, geometry and one-sided solids (EyeInputs): the pyramid is
 // made at the end of Surface in a frame of any other view, and read from the next one on (the
 // classroom at 512x512: 28 430 triangles drawn in a view's first frame, 19 504 from its second
-// with the blocks alone, 15 885 with the small triangles' pixels; Surface 13.1 -> 10.3 -> 10.0 ms,
+// with the blocks alone, 15 933 with the small triangles' pixels; Surface 13.1 -> 10.3 -> 10.0 ms,
 // session 36).
 //
 // The others are compacted in their order, so that Surface draws the same triangles in the same
@@ -136,24 +138,44 @@ fn empty(t: u32) -> bool {
         let hi = max(pa, max(pb, pc));
         empty = misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y);
         if (!empty) {
-            let nearest = min(a.z / a.w, min(b.z / b.w, c.z / c.w));
+            let z = vec3f(a.z / a.w, b.z / b.w, c.z / c.w);
+            // The nearest depth the rasterizer can give the triangle at a pixel it covers.
+            let nearest = min(z.x, min(z.y, z.z)) - depth_margin(pa, pb, pc, z);
             let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
             let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
             if (all(last - first <= vec2f(2.0))) {
                 empty = !shows_a_centre(pa, pb, pc, first, last, nearest);
             } else if (f.work.w != 0u) {
-                empty = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w) < nearest - 1e-6;
+                empty = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w) < nearest;
             }
         }
     }
     return empty;
 }
 
+// How far below its vertices' least depth z the rasterizer may give a triangle (pixel coordinates
+// pa, pb, pc) at a pixel centre it covers: the depth's plane, taken from the vertices as they are,
+// goes on past an edge that the rasterizer's snapping to 1/256 pixel moved outward (by under EPS),
+// by the plane's slope times that. A sliver's slope is steep (with a fixed 1e-6 this test left out
+// slivers of the built-in room that drew a pixel below their least depth: tests/shadow_faces.rs
+// caught it), and a degenerate one's unbounded: infinite, so that it is never left out. Plus 1e-6
+// for rounding.
+fn depth_margin(pa: vec2f, pb: vec2f, pc: vec2f, z: vec3f) -> f32 {
+    let e1 = pb - pa;
+    let e2 = pc - pa;
+    let area2 = e1.x * e2.y - e1.y * e2.x;
+    let dz = vec2f(z.y - z.x, z.z - z.x);
+    // The plane's gradient: (dz/dx, dz/dy) = (dz1 e2.y - dz2 e1.y, dz2 e1.x - dz1 e2.x) / area2.
+    let slope = abs(dz.x * e2.y - dz.y * e1.y) + abs(dz.y * e1.x - dz.x * e2.x);
+    if (!(abs(area2) > 0.0)) { return 3.0e38; }
+    return 1e-6 + EPS * slope / abs(area2);
+}
+
 // Whether a small triangle (pixel coordinates pa, pb, pc; the pixel centres first..last of its box,
 // at most 3x3) shows at one of them: it covers the centre, unless the centre lies outside one of
 // its edges by more than EPS pixels (the edge function, a cross product, is the edge's length
 // times the distance), and, with an earlier frame's depth of this view (f.work.w), that depth
-// there is not nearer than `nearest` by the margin (above).
+// there is not nearer than `nearest` (its least depth less the margin, `depth_margin`).
 fn shows_a_centre(pa: vec2f, pb: vec2f, pc: vec2f, first: vec2f, last: vec2f, nearest: f32) -> bool {
     // Inside is where all three edge functions have the sign of the triangle's area.
     let area = (pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x);
@@ -173,7 +195,7 @@ fn shows_a_centre(pa: vec2f, pb: vec2f, pc: vec2f, first: vec2f, last: vec2f, ne
                 e2.x * (q.y - pc.y) - e2.y * (q.x - pc.x),
             );
             if (all(d >= -margin)) {
-                shows = shows || !depths || !(pyramid[image_start + u32(y) * f.image.x + u32(x)] < nearest - 1e-6);
+                shows = shows || !depths || !(pyramid[image_start + u32(y) * f.image.x + u32(x)] < nearest);
             }
         }
     }
