@@ -492,9 +492,8 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
-        // (COPY_SRC: the eye's pyramid keeps a copy of the view-projection it was made with.)
         let frame_buffer =
-            uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>(), wgpu::BufferUsages::COPY_SRC);
+            uniform("Renderer::frame_uniforms", std::mem::size_of::<FrameUniforms>(), wgpu::BufferUsages::empty());
         // The pyramid keeps a copy of the matrix its map was drawn with (ShadowPyramid::record).
         let shadow_uniforms =
             uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>(), wgpu::BufferUsages::COPY_SRC);
@@ -1054,8 +1053,7 @@ impl Renderer {
             let eye = EyeDrawing { runs: &eye_runs, toward_ccw: eye_ccw, cull: self.surface_culling };
             p.surface.record(&mut f.enc, v, g, targets, eye);
             if eye_build.is_some() {
-                p.eye_pyramid
-                    .record(&mut f.enc, (&self.frame_buffer, std::mem::offset_of!(FrameUniforms, view_proj) as u64));
+                p.eye_pyramid.record(&mut f.enc, None);
             }
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
@@ -1124,7 +1122,7 @@ impl Renderer {
         // For the frames after this one, while its map's inputs stay the same.
         let build = self.pyramid_to_build.take();
         if build.is_some() {
-            p.shadow_pyramid.record(&mut f.enc, (&self.shadow_uniforms, 0));
+            p.shadow_pyramid.record(&mut f.enc, Some((&self.shadow_uniforms, 0)));
             f.mark(Pass::ShadowPyramid);
         }
         let done = self.finish(f, setup, v, reused);

@@ -58,16 +58,18 @@ pub struct Level {
 /// The pyramid of block maxima of a depth image, keyed by what the image was drawn from: the sun's
 /// shadow map ([`ShadowPyramid`]) or the eye's depth ([`EyePyramid`]).
 pub struct DepthPyramid<K> {
-    /// The wgpu objects' label prefix ("ShadowPyramid", "EyePyramid").
+    /// The wgpu objects' label prefix ("ShadowPyramid", "EyePyramid"), and the pass's label.
     name: &'static str,
+    pass_label: String,
     from_map: wgpu::ComputePipeline,
     from_level: wgpu::ComputePipeline,
     /// With the image itself after the levels ([`DepthPyramid::new`]'s `whole`).
     whole_image: Option<wgpu::ComputePipeline>,
     layout: wgpu::BindGroupLayout,
-    /// The view-projection of the map it was made from ([`ShadowPyramid::MATRIX_FLOATS`] floats),
-    /// then levels [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the
-    /// other (hidden.wgsl computes the same offsets from the map's size).
+    /// The view-projection of the map it was made from ([`ShadowPyramid::MATRIX_FLOATS`] floats;
+    /// left unwritten in the eye's, which no reader projects with), then levels
+    /// [`ShadowPyramid::FIRST_LEVEL`] to [`ShadowPyramid::coarsest`], one after the other
+    /// (hidden.wgsl computes the same offsets from the map's size), then the eye's image itself.
     pub pyramid: Option<wgpu::Buffer>,
     /// What the pyramid and its bind groups were made for.
     bound: Option<Bound>,
@@ -97,18 +99,22 @@ pub type EyePyramid = DepthPyramid<EyeInputs>;
 /// whether solids draw one side. A frame with the same inputs draws the same depth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EyeInputs {
-    view: [u8; 88],
+    view_proj: [u32; 16],
+    eye: [u32; 4],
+    size: [u32; 2],
     geometry: u64,
     one_sided: bool,
 }
 
 impl EyeInputs {
     pub fn new(u: &super::FrameUniforms, geometry: u64, one_sided: bool) -> EyeInputs {
-        let mut view = [0u8; 88];
-        view[..64].copy_from_slice(bytemuck::bytes_of(&u.view_proj));
-        view[64..80].copy_from_slice(bytemuck::bytes_of(&u.eye));
-        view[80..].copy_from_slice(bytemuck::bytes_of(&[u.image.x, u.image.y]));
-        EyeInputs { view, geometry, one_sided }
+        EyeInputs {
+            view_proj: bytemuck::cast(u.view_proj),
+            eye: bytemuck::cast(u.eye),
+            size: [u.image.x, u.image.y],
+            geometry,
+            one_sided,
+        }
     }
 }
 
@@ -160,6 +166,7 @@ impl<K> DepthPyramid<K> {
         let layout = ShadowPyramidBindings::layout(device, &format!("{name}::layout"), wgpu::ShaderStages::COMPUTE);
         Ok(DepthPyramid {
             name,
+            pass_label: format!("{name}::pass"),
             from_map: compute_pipeline(device, &format!("{name}::from_map"), &module, "from_map", &layout),
             from_level: compute_pipeline(device, &format!("{name}::from_level"), &module, "from_level", &layout),
             whole_image: whole
@@ -228,40 +235,39 @@ impl<K> DepthPyramid<K> {
         }
         let Some(pyramid) = &self.pyramid else { return };
         // One storage buffer per level: its parameters never change while the map keeps its size.
-        let mut groups: Vec<(wgpu::BindGroup, u32)> = params
-            .iter()
-            .chain(whole.iter())
-            .enumerate()
-            .map(|(i, p)| {
-                let level = wgpu::util::DeviceExt::create_buffer_init(
-                    device,
-                    &wgpu::util::BufferInitDescriptor {
-                        label: Some(&format!("{}::level{}", self.name, i + 1)),
-                        contents: bytemuck::bytes_of(p),
-                        usage: wgpu::BufferUsages::STORAGE,
-                    },
-                );
-                let b = ShadowPyramidBindings {
-                    shadow_map: wgpu::BindingResource::TextureView(map_view),
-                    pyramid: pyramid.as_entire_binding(),
-                    level: level.as_entire_binding(),
-                };
-                (b.bind(device, &format!("{}::bind_group{}", self.name, i + 1), &self.layout), p.dst_size)
-            })
-            .collect();
-        let whole = whole.and_then(|_| groups.pop()).map(|(g, _)| (g, dims));
+        let group = |name: &str, p: &Level| {
+            let level = wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(&format!("{}::{name}", self.name)),
+                    contents: bytemuck::bytes_of(p),
+                    usage: wgpu::BufferUsages::STORAGE,
+                },
+            );
+            let b = ShadowPyramidBindings {
+                shadow_map: wgpu::BindingResource::TextureView(map_view),
+                pyramid: pyramid.as_entire_binding(),
+                level: level.as_entire_binding(),
+            };
+            b.bind(device, &format!("{}::bind_group_{name}", self.name), &self.layout)
+        };
+        let groups =
+            params.iter().enumerate().map(|(i, p)| (group(&format!("level{}", i + 1), p), p.dst_size)).collect();
+        let whole = whole.map(|p| (group("whole_image", &p), dims));
         self.bound = Some(Bound { size, view: map_view.clone(), groups, whole });
     }
 
-    /// Reduces the map, level by level, after the view-projection it was drawn with (`matrix`: a
-    /// buffer and the offset of the matrix in it; for the sun's map the first matrix of the
-    /// lookups' `ShadowFaces`, which holds the fitted one).
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, matrix: (&wgpu::Buffer, u64)) {
+    /// Reduces the map, level by level, after the view-projection it was drawn with when a reader
+    /// projects with it (`matrix`: a buffer and the offset of the matrix in it; for the sun's map
+    /// the first matrix of the lookups' `ShadowFaces`, which holds the fitted one). The eye's
+    /// culling reads no matrix (its pyramid serves only the very view it was made from): `None`.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, matrix: Option<(&wgpu::Buffer, u64)>) {
         let (Some(Bound { groups, whole, .. }), Some(pyramid)) = (&self.bound, &self.pyramid) else { return };
-        encoder.copy_buffer_to_buffer(matrix.0, matrix.1, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
-        let label = format!("{}::pass", self.name);
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(&label), timestamp_writes: None });
+        if let Some((buffer, offset)) = matrix {
+            encoder.copy_buffer_to_buffer(buffer, offset, pyramid, 0, Self::MATRIX_FLOATS as u64 * 4);
+        }
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(&self.pass_label), timestamp_writes: None });
         for (i, (bind_group, size)) in groups.iter().enumerate() {
             pass.set_pipeline(if i == 0 { &self.from_map } else { &self.from_level });
             pass.set_bind_group(0, bind_group, &[]);

@@ -55,11 +55,13 @@ pub struct EyeDrawing<'a> {
 
 /// The eye's draw list for one scene's geometry (surface_cull.wgsl).
 struct EyeList {
-    /// The scene index buffer, the frame parameters and the eye's depth pyramid it was made from
-    /// (remade when they change).
+    /// The scene index buffer and the frame parameters it was made from (remade when they change),
+    /// and the eye's depth pyramid its bind group reads (rebound when it changes: a new image size).
     source: wgpu::Buffer,
     frame: wgpu::Buffer,
     pyramid: wgpu::Buffer,
+    /// The culling's per-thread words (`mark`, `compact`).
+    threads: wgpu::Buffer,
     /// The scene's indices without the triangles that would draw nothing, in their order.
     lists: wgpu::Buffer,
     /// Per block of [`Surface::CULL_BLOCK`] triangles, the kept ones before it, then the total.
@@ -138,16 +140,20 @@ impl Surface {
     }
 
     /// (Re)binds the inputs; called when the resources change. The eye's draw list is remade
-    /// only for another scene (or frame buffer, or eye pyramid: [`super::EyePyramid`], which its
-    /// culling reads).
+    /// only for another scene (or frame buffer), and its culling rebound for another eye pyramid
+    /// ([`super::EyePyramid`], which it reads: one per image size).
     pub fn bind(&mut self, device: &wgpu::Device, frame: &wgpu::Buffer, geometry: &SceneGpu, pyramid: &wgpu::Buffer) {
         let b = SurfaceBindings { frame_in: frame.as_entire_binding() };
         self.bind_group = Some(b.bind(device, "Surface::bind_group", &self.layout));
-        if self
-            .eye_list
-            .as_ref()
-            .is_some_and(|l| l.source == geometry.indices && l.frame == *frame && l.pyramid == *pyramid)
-        {
+        let layout = &self.cull_layout;
+        if let Some(l) = self.eye_list.as_mut().filter(|l| l.source == geometry.indices && l.frame == *frame) {
+            if l.pyramid != *pyramid {
+                if let Some(tris) = geometry.whole_triangles() {
+                    let buffers = [&l.lists, &l.threads, &l.blocks, &l.runs, &l.args];
+                    l.bind_group = Self::cull_bind_group(device, layout, frame, geometry, tris, buffers, pyramid);
+                    l.pyramid = pyramid.clone();
+                }
+            }
             return;
         }
         self.eye_list = None;
@@ -174,7 +180,35 @@ impl Surface {
         let blocks = buffer("Surface::cull_blocks", (block_count + 1) * 4, wgpu::BufferUsages::empty());
         let runs = buffer("Surface::cull_runs", (meshes as u64 + 1) * 8, wgpu::BufferUsages::COPY_DST);
         let args = buffer("Surface::cull_args", meshes.max(1) as u64 * Self::ARGS_BYTES, wgpu::BufferUsages::INDIRECT);
-        let bind_group = SurfaceCullBindings {
+        let buffers = [&lists, &threads, &blocks, &runs, &args];
+        let bind_group = Self::cull_bind_group(device, layout, frame, geometry, tris, buffers, pyramid);
+        self.eye_list = Some(EyeList {
+            source: geometry.indices.clone(),
+            frame: frame.clone(),
+            pyramid: pyramid.clone(),
+            threads,
+            lists,
+            blocks,
+            runs,
+            written_runs: None,
+            args,
+            bind_group,
+            triangles,
+            meshes,
+        });
+    }
+
+    /// The culling's bind group over a list's buffers (lists, threads, blocks, runs, args).
+    fn cull_bind_group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        frame: &wgpu::Buffer,
+        geometry: &SceneGpu,
+        tris: &wgpu::Buffer,
+        [lists, threads, blocks, runs, args]: [&wgpu::Buffer; 5],
+        pyramid: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let b = SurfaceCullBindings {
             frame_in: frame.as_entire_binding(),
             tris: tris.as_entire_binding(),
             indices: geometry.indices.as_entire_binding(),
@@ -185,21 +219,8 @@ impl Surface {
             runs: runs.as_entire_binding(),
             args: args.as_entire_binding(),
             pyramid: pyramid.as_entire_binding(),
-        }
-        .bind(device, "Surface::cull_bind_group", &self.cull_layout);
-        self.eye_list = Some(EyeList {
-            source: geometry.indices.clone(),
-            frame: frame.clone(),
-            pyramid: pyramid.clone(),
-            lists,
-            blocks,
-            runs,
-            written_runs: None,
-            args,
-            bind_group,
-            triangles,
-            meshes,
-        });
+        };
+        b.bind(device, "Surface::cull_bind_group", layout)
     }
 
     /// Builds the pipeline specialised to `variant` unless it exists.
