@@ -64,8 +64,8 @@ fn extend(e: vec4f, m: mat4x4f, p: vec3f) -> vec4f {
 @compute @workgroup_size(64)
 fn reduce(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) lid: u32) {
     f = frame_in;
-    if (lid < 4u) { atomicStore(&group_codes[lid], 0u); }
-    workgroupBarrier();
+    // group_codes start at 0 (below every code): WGSL zero-initialises workgroup memory, as in
+    // ranges.wgsl's reduce.
     var e = vec4f(-3.0e38);
     // Read once: on llvmpipe every read of a storage buffer is a load per lane.
     let m = shadow.view_proj[0];
