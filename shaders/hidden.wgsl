@@ -47,9 +47,32 @@ fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2
     let lo = floor(min(t0, min(t1, t2))) - 1.0;
     let hi = floor(max(t0, max(t1, t2))) + 1.0;
     if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
-    // A margin of a few float steps of depth 1: the rasterizer's own depth of the triangle at a
-    // texel centre may round below its vertices' minimum.
-    return pyramid_max(vec2u(lo), vec2u(hi), u32(n), coarsest) < min(c0.z, min(c1.z, c2.z)) - 4e-6;
+    // A margin of a few float steps of depth 1 (the rasterizer's own depth at a texel centre may
+    // round below the vertices' least), and a steep sliver's slope past its snapped edges.
+    let margin = depth_margin(t0, t1, t2, vec3f(c0.z, c1.z, c2.z), 4e-6);
+    return pyramid_max(vec2u(lo), vec2u(hi), u32(n), coarsest) < min(c0.z, min(c1.z, c2.z)) - margin;
+}
+
+// How far outside a triangle's edges the rasterizer may take a texel (or pixel) centre as covered:
+// it snaps the vertices to 1/256 of a texel, which moves an edge outward by under this.
+const COVER_EPS: f32 = 0.015625;
+
+// How far below its vertices' least depth z the rasterizer may give a triangle (texel or pixel
+// coordinates a, b, c) at a centre it covers: the depth's plane, taken from the vertices as they
+// are, goes on past an edge that snapping moved outward (by under COVER_EPS), by the plane's slope
+// times that. A sliver's slope is steep (with a fixed margin Surface's culling left out slivers of
+// the built-in room that drew a pixel below their least depth: tests/shadow_faces.rs caught it,
+// session 36), and that of a triangle of no area unbounded: infinite, so that it is never left
+// out. Plus `rounding`.
+fn depth_margin(a: vec2f, b: vec2f, c: vec2f, z: vec3f, rounding: f32) -> f32 {
+    let e1 = b - a;
+    let e2 = c - a;
+    let area2 = e1.x * e2.y - e1.y * e2.x;
+    let dz = vec2f(z.y - z.x, z.z - z.x);
+    // The plane's gradient: (dz/dx, dz/dy) = (dz1 e2.y - dz2 e1.y, dz2 e1.x - dz1 e2.x) / area2.
+    let slope = abs(dz.x * e2.y - dz.y * e1.y) + abs(dz.y * e1.x - dz.x * e2.x);
+    if (!(abs(area2) > 0.0)) { return 3.0e38; }
+    return rounding + COVER_EPS * slope / abs(area2);
 }
 
 // The farthest depth over texels [a, b] (inclusive, inside a map of `size` texels per side), read

@@ -33,15 +33,15 @@
 // makes it fail the depth test at every pixel: the frame draws the same depth and targets without
 // it, and so the next frame's pyramid is the same too. A small triangle (at most 3x3 centres in
 // its box) is tested pixel by pixel instead, against the depth itself, which the pyramid keeps
-// after its levels: only at the centres it covers (`shows_a_centre`). The margin (`depth_margin`):
-// the rasterizer takes the depth's plane from the vertices as they are but its coverage from the
-// vertices snapped to 1/256 pixel, so at a covered centre just past an edge the plane runs on
-// below the vertices' least by its slope times the snapping; plus 1e-6 for rounding. Same view means the same
-// view-projection, eye, image size, geometry and one-sided solids (EyeInputs): the pyramid is
-// made at the end of Surface in a frame of any other view, and read from the next one on (the
-// classroom at 512x512: 28 430 triangles drawn in a view's first frame, 19 504 from its second
-// with the blocks alone, 15 933 with the small triangles' pixels; Surface 13.1 -> 10.3 -> 10.0 ms,
-// session 36).
+// after its levels: only at the centres it covers (`shows_a_centre`). The margin (`depth_margin`,
+// hidden.wgsl): the rasterizer takes the depth's plane from the vertices as they are but its
+// coverage from the vertices snapped to 1/256 pixel, so at a covered centre just past an edge the
+// plane runs on below the vertices' least by its slope times the snapping; plus 1e-6 for
+// rounding. Same view means the same view-projection, eye, image size, geometry and one-sided
+// solids (EyeInputs): the pyramid is made at the end of Surface in a frame of any other view,
+// and read from the next one on (the classroom at 512x512: 28 430 triangles drawn in a view's
+// first frame, 19 504 from its second with the blocks alone, 15 933 with the small triangles'
+// pixels; Surface 13.1 -> 10.3 -> 10.0 ms, session 36).
 //
 // The others are compacted in their order, so that Surface draws the same triangles in the same
 // order and its targets are the same, bit for bit (a tie in depth keeps the first drawn): an
@@ -90,8 +90,9 @@
 // Private copy of the frame's parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
 
-// How far past the bounding box a pixel centre may be and still count, in pixels.
-const EPS: f32 = 0.015625;
+// How far past the bounding box a pixel centre may be and still count, in pixels: what the
+// rasterizer's snapping may move an edge (hidden.wgsl).
+const EPS: f32 = COVER_EPS;
 // How clearly a face must turn away from the eye to be emptied (the sine of its angle to the way
 // toward the eye).
 const FACING_TOL: f32 = 1e-3;
@@ -140,7 +141,7 @@ fn empty(t: u32) -> bool {
         if (!empty) {
             let z = vec3f(a.z / a.w, b.z / b.w, c.z / c.w);
             // The nearest depth the rasterizer can give the triangle at a pixel it covers.
-            let nearest = min(z.x, min(z.y, z.z)) - depth_margin(pa, pb, pc, z);
+            let nearest = min(z.x, min(z.y, z.z)) - depth_margin(pa, pb, pc, z, 1e-6);
             let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
             let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
             if (all(last - first <= vec2f(2.0))) {
@@ -151,24 +152,6 @@ fn empty(t: u32) -> bool {
         }
     }
     return empty;
-}
-
-// How far below its vertices' least depth z the rasterizer may give a triangle (pixel coordinates
-// pa, pb, pc) at a pixel centre it covers: the depth's plane, taken from the vertices as they are,
-// goes on past an edge that the rasterizer's snapping to 1/256 pixel moved outward (by under EPS),
-// by the plane's slope times that. A sliver's slope is steep (with a fixed 1e-6 this test left out
-// slivers of the built-in room that drew a pixel below their least depth: tests/shadow_faces.rs
-// caught it), and a degenerate one's unbounded: infinite, so that it is never left out. Plus 1e-6
-// for rounding.
-fn depth_margin(pa: vec2f, pb: vec2f, pc: vec2f, z: vec3f) -> f32 {
-    let e1 = pb - pa;
-    let e2 = pc - pa;
-    let area2 = e1.x * e2.y - e1.y * e2.x;
-    let dz = vec2f(z.y - z.x, z.z - z.x);
-    // The plane's gradient: (dz/dx, dz/dy) = (dz1 e2.y - dz2 e1.y, dz2 e1.x - dz1 e2.x) / area2.
-    let slope = abs(dz.x * e2.y - dz.y * e1.y) + abs(dz.y * e1.x - dz.x * e2.x);
-    if (!(abs(area2) > 0.0)) { return 3.0e38; }
-    return 1e-6 + EPS * slope / abs(area2);
 }
 
 // Whether a small triangle (pixel coordinates pa, pb, pc; the pixel centres first..last of its box,
