@@ -393,8 +393,8 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
 
 /// `epivox ab` without `--b`: B runs A's shaders with its own renderer settings. A Voxelize run
 /// of 3 items sets the same bits (the work list's shape changes nothing), the surfaces' shadows
-/// from the grid instead of the map change the final image, and B's description names the flags;
-/// a run out of its range is named.
+/// from the grid instead of the map, or from a coarser map, change the final image, and B's
+/// description names the flags; a run or a map size out of its range is named.
 #[test]
 fn ab_times_the_b_sides_settings_against_a() {
     if !has_adapter() {
@@ -414,4 +414,11 @@ fn ab_times_the_b_sides_settings_against_a() {
     assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.contains("--b-surface-shadows grid")), "{j}");
     let err = fails(&["ab", "--b-voxelize-run", "0"], &[]);
     assert!(err.contains("voxelize-run") && err.contains("1024"), "{err}");
+    // A coarser map changes the surfaces' shadows (the built-in room's sunlit floor), not the
+    // march's steps; a size out of its range is named.
+    let j = run(&["--b-shadow-map", "64"]);
+    assert_eq!(j["final"]["same"], false, "{j}");
+    assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.ends_with("with --b-shadow-map 64")), "{j}");
+    let err = fails(&["ab", "--b-shadow-map", "20"], &[]);
+    assert!(err.contains("shadow-map") && err.contains("64"), "{err}");
 }

@@ -3,7 +3,7 @@
 use anyhow::{bail, Context, Result};
 use epivox::bench::ab::{self, AbImages, AbOptions, AbResult, RoundSummary};
 use epivox::gpu::{GpuContext, ShaderLibrary};
-use epivox::params::{Grid, Measure};
+use epivox::params::{Baseline, Grid, Measure};
 use epivox::render::{Method as GpuMethod, Renderer};
 use epivox::scene::{builtin_scene, load_scene};
 use std::path::{Path, PathBuf};
@@ -55,10 +55,10 @@ pub struct AbArgs {
 }
 
 /// What the B side's renderer does differently from A's besides its shaders: the same choices as
-/// `--scan`, `--surface-shadows` and `--pixels` (which set both sides), for B alone, and the
-/// Voxelize work list's runs. A change to the renderer's settings is then timed against the
-/// current ones in one process, like a shader edit (two binaries in alternating processes mislead
-/// on a shared machine: docs/results.md, session 35).
+/// `--scan`, `--surface-shadows` and `--pixels` (which set both sides), for B alone, the
+/// Voxelize work list's runs and the shadow map's size. A change to the renderer's settings is
+/// then timed against the current ones in one process, like a shader edit (two binaries in
+/// alternating processes mislead on a shared machine: docs/results.md, session 35).
 #[derive(clap::Args)]
 pub struct BSettings {
     /// B's --scan.
@@ -74,17 +74,28 @@ pub struct BSettings {
           value_parser = |s: &str| super::parse_count::<u32>(&Measure::VOXELIZE_RUN, s),
           help = super::spec_help("B's Voxelize work items a thread (and Cull's triangles a thread)", &Measure::VOXELIZE_RUN))]
     pub voxelize_run: Option<u32>,
+    #[arg(id = "b_shadow_map", long = "b-shadow-map", value_name = "TEXELS",
+          value_parser = |s: &str| super::parse_count::<u32>(&Baseline::SHADOW_MAP, s),
+          help = super::spec_help(
+              "B's shadow-map texels per side (the surfaces' shadows; with --method raymarch the march's visibility too)",
+              &Baseline::SHADOW_MAP,
+          ))]
+    pub shadow_map: Option<u32>,
 }
 
 impl BSettings {
     /// Sets B's renderer apart from A's, after the choices both sides share.
-    fn apply(&self, renderer: &mut Renderer) {
+    fn apply(&self, renderer: &mut Renderer) -> Result<()> {
         let choices =
             super::PassChoices { scan: self.scan, surface_shadows: self.surface_shadows, pixels: self.pixels };
         choices.apply(renderer);
         if let Some(run) = self.voxelize_run {
             renderer.set_voxelize_work(run, renderer.voxelize_work().1);
         }
+        if let Some(size) = self.shadow_map {
+            renderer.set_shadow_map_size(size).context("--b-shadow-map")?;
+        }
+        Ok(())
     }
 
     /// The settings given, as the flags that set them (empty when B differs by its shaders alone).
@@ -104,6 +115,9 @@ impl BSettings {
         }
         if let Some(run) = self.voxelize_run {
             flags.push(format!("--b-voxelize-run {run}"));
+        }
+        if let Some(size) = self.shadow_map {
+            flags.push(format!("--b-shadow-map {size}"));
         }
         flags
     }
@@ -143,7 +157,7 @@ pub fn ab(args: AbArgs) -> Result<()> {
     };
     let mut a = side(args.a.as_deref(), "A")?;
     let mut b = side(args.b.as_deref().or(args.a.as_deref()), "B")?;
-    args.b_side.apply(&mut b);
+    args.b_side.apply(&mut b)?;
     let method = match args.method {
         AbMethod::Vsv => GpuMethod::Vsv,
         AbMethod::Cartesian => GpuMethod::Cartesian,
