@@ -2,7 +2,8 @@
 // around it, from the pyramid of its block maxima (shadow_pyramid.wgsl). Imported by Cull (which
 // then does not voxelize the triangle) and by the shadow map's sun list (shadow_cull.wgsl, which
 // then does not draw it: it could not win the depth test at any texel centre it covers); and, for
-// the pyramid of the eye's depth, by Surface's culling (surface_cull.wgsl, `pyramid_max`).
+// the pyramid of the eye's depth, by Surface's culling (surface_cull.wgsl, `pyramid_max` and
+// `depth_margin`).
 //
 // The importing file declares `pyramid: array<f32>`: the view-projection of the map it was made
 // from (PYRAMID_MATRIX_FLOATS floats, column by column), then levels PYRAMID_FIRST_LEVEL to the

@@ -54,8 +54,8 @@ fn reduce(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_in
     f = frame_in;
     // group_max starts at 0 without a store and a barrier of our own: WGSL zero-initialises
     // workgroup memory (wgpu's default; lavapipe does it in the driver). The explicit store and
-    // barrier cost the classroom's Ranges 0.5 ms on llvmpipe, where a barrier switches between all
-    // of a workgroup's invocations (3.14 -> 2.68 ms, 6 of 6 rounds, session 37).
+    // barrier cost the classroom's Ranges 0.5 ms on llvmpipe (3.14 -> 2.68 ms, 6 of 6 rounds,
+    // session 37; more than a barrier costs alone, docs/results.md).
     var z = 0.0;
     if (id.x < f.image.x) {
         let y0 = id.y * ROWS;

@@ -414,8 +414,8 @@ fn ab_times_the_b_sides_settings_against_a() {
     assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.contains("--b-surface-shadows grid")), "{j}");
     let err = fails(&["ab", "--b-voxelize-run", "0"], &[]);
     assert!(err.contains("voxelize-run") && err.contains("1024"), "{err}");
-    // A coarser map changes the surfaces' shadows (the built-in room's sunlit floor), not the
-    // march's steps; a size out of its range is named.
+    // A coarser map changes the surfaces' shadows (the built-in room's sunlit floor); a size out
+    // of its range is named.
     let j = run(&["--b-shadow-map", "64"]);
     assert_eq!(j["final"]["same"], false, "{j}");
     assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.ends_with("with --b-shadow-map 64")), "{j}");
