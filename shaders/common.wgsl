@@ -38,6 +38,7 @@ override GRID_SHADOWS: bool = false; // the surfaces' shadows come from the shad
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
+const FLAG_HIDDEN_BLOCKS: u32 = 64u; // Cull tests large triangles' blocks of planes against the sun's pyramid
 
 struct Frame {
     // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.
@@ -99,6 +100,10 @@ fn is_point_light() -> bool { return POINT_LIGHT; }
 fn words_per_item(f: Frame) -> u32 {
     return max(f.work.y, 1u);
 }
+
+// Planes per block of a large triangle's range that Cull tests against the sun's pyramid on its
+// own (cull.wgsl `hidden_blocks`); Voxelize skips the items of the blocks it finds hidden.
+const HIDDEN_BLOCK: u32 = 64u;
 
 // Voxelize's work items for a triangle's `words` words of bins in one plane. In f32: llvmpipe
 // divides integers one lane at a time; both operands are at most 64 (Grid::BINS.max / 32), where

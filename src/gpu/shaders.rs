@@ -27,6 +27,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("shadow_fit.wgsl", include_str!("../../shaders/shadow_fit.wgsl")),
     ("cull.wgsl", include_str!("../../shaders/cull.wgsl")),
     ("triangle_bounds.wgsl", include_str!("../../shaders/triangle_bounds.wgsl")),
+    ("plane_segment.wgsl", include_str!("../../shaders/plane_segment.wgsl")),
     ("shadow_lookup.wgsl", include_str!("../../shaders/shadow_lookup.wgsl")),
     ("hidden.wgsl", include_str!("../../shaders/hidden.wgsl")),
     ("workgroup_scan.wgsl", include_str!("../../shaders/workgroup_scan.wgsl")),
@@ -34,8 +35,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
 ];
 
 /// The files that only declare things for others to `#import` (validated through their users).
-pub const IMPORTED_ONLY: &[&str] =
-    &["common.wgsl", "triangle_bounds.wgsl", "shadow_lookup.wgsl", "hidden.wgsl", "workgroup_scan.wgsl"];
+pub const IMPORTED_ONLY: &[&str] = &[
+    "common.wgsl",
+    "triangle_bounds.wgsl",
+    "plane_segment.wgsl",
+    "shadow_lookup.wgsl",
+    "hidden.wgsl",
+    "workgroup_scan.wgsl",
+];
 
 /// A shader that failed to load, compose or validate.
 #[derive(Debug, Clone, thiserror::Error)]

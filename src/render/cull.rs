@@ -29,6 +29,8 @@ bindings! {
         sides: Kind::Storage,
         shadow: Kind::Storage,
         pyramid: Kind::Storage,
+        hidden: Kind::StorageRw,
+        pairs: Kind::StorageRw,
     }
 }
 
@@ -59,6 +61,12 @@ pub struct CullLists {
     pub offsets: wgpu::Buffer,
     /// Per block of 1024 kept triangles: the exclusive prefix sum of the blocks' items.
     pub blocks: wgpu::Buffer,
+    /// Per kept triangle: bit i set where block i of its planes (64 each, from its record's first
+    /// plane) is hidden from the sun (cull.wgsl `hidden_blocks`); Voxelize skips those items.
+    pub hidden: wgpu::Buffer,
+    /// Per block of 1024 kept triangles, the (triangle, block of planes) pairs Cull tests for
+    /// `hidden` ([`Cull::PAIRS_PER_BLOCK`] at most).
+    pub pairs: wgpu::Buffer,
 }
 
 impl CullLists {
@@ -76,6 +84,8 @@ impl CullLists {
             records: storage("CullLists::records", n * 16),
             offsets: storage("CullLists::offsets", n * 4),
             blocks: storage("CullLists::blocks", n.div_ceil(Cull::BLOCK as u64) * 4),
+            hidden: storage("CullLists::hidden", n * 4),
+            pairs: storage("CullLists::pairs", n.div_ceil(Cull::BLOCK as u64) * Cull::PAIRS_PER_BLOCK * 4),
         }
     }
 
@@ -98,6 +108,8 @@ pub struct Cull {
 impl Cull {
     /// Kept triangles per prefix-sum workgroup.
     pub const BLOCK: u32 = 1024;
+    /// (Triangle, block of planes) pairs tested per block of kept triangles (cull.wgsl `PAIRS`).
+    pub const PAIRS_PER_BLOCK: u64 = 2048;
     /// Byte offsets of the indirect arguments in [`Cull::dispatch`].
     pub const VOXELIZE_ARGS: u64 = 12;
     pub const SCAN_ARGS: u64 = 24;
@@ -162,6 +174,8 @@ impl Cull {
                     sides: geometry.light_sides.as_entire_binding(),
                     shadow: shadow.as_entire_binding(),
                     pyramid: pyramid.as_entire_binding(),
+                    hidden: l.hidden.as_entire_binding(),
+                    pairs: l.pairs.as_entire_binding(),
                 };
                 (b.bind(device, &format!("Cull::bind_group[{i}]"), &self.layout), n)
             })

@@ -16,6 +16,10 @@ pub const FLAG_NO_SCATTER: u32 = 16;
 /// only, where it picks the passes' pipelines ([`super::Variant::grid_shadows`]): no shader
 /// branches on it.
 pub const FLAG_GRID_SHADOWS: u32 = 32;
+/// Cull tests the blocks of a large triangle's planes against the sun's pyramid on their own and
+/// Voxelize skips the hidden ones (cull.wgsl `hidden_blocks`): set by the renderer unless
+/// [`super::Renderer::hidden_blocks`] is off.
+pub const FLAG_HIDDEN_BLOCKS: u32 = 64;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
 #[repr(C)]

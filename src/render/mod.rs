@@ -394,6 +394,12 @@ pub struct Renderer {
     /// whose map had the same inputs (the light, the geometry, the map's size and the view the map
     /// is fitted to): the frame after a change runs without it and reduces its own map at its end.
     pub occlusion_culling: bool,
+    /// Directional lights, with [`Renderer::occlusion_culling`]: Cull also tests each large
+    /// triangle's planes in blocks of 64 against the same pyramid, trims the hidden blocks at either
+    /// end of its range from its work and has Voxelize skip the others (cull.wgsl `hidden_blocks`;
+    /// on the classroom a sixth of Voxelize's items, the shadow volume the same word for word). On
+    /// by default; off only to compare, `tests/occlusion.rs`.
+    pub hidden_blocks: bool,
     /// Surface leaves out the triangles behind the depth an earlier frame of the same view left
     /// at every pixel they cover ([`EyePyramid`], surface_cull.wgsl; needs
     /// [`Renderer::surface_culling`]). The targets are the same, bit for bit; a frame of a new
@@ -508,6 +514,7 @@ impl Renderer {
             surface_culling: true,
             scan_columns,
             occlusion_culling: true,
+            hidden_blocks: true,
             eye_occlusion_culling: true,
             fit_shadow_map: true,
             grid_shadows: false,
@@ -672,14 +679,15 @@ impl Renderer {
         if self.geometry.as_ref().is_some_and(|g| g.fingerprint == scene.geometry_fingerprint()) {
             return Ok(());
         }
-        // The lists Cull fills hold 20 bytes per triangle of a chunk: past the adapter's largest
-        // buffer the scene cannot be voxelized at all.
+        // The lists Cull fills hold 32 bytes per triangle of a chunk (records, offsets, hidden
+        // blocks and the blocks' pairs): past the adapter's largest buffer the scene cannot be
+        // voxelized at all.
         let n = scene.triangle_count() as u64;
         let l = self.ctx.device.limits();
         let per_chunk = l.max_storage_buffer_binding_size.min(l.max_buffer_size) / SceneGpu::TRIANGLE_BYTES;
         self.ctx.check_buffer(
             &format!("the work lists of {n} triangles"),
-            n.min(per_chunk) * (CullLists::BYTES_PER_TRIANGLE + 4),
+            n.min(per_chunk) * (CullLists::BYTES_PER_TRIANGLE + 16),
         )?;
         let during = match &scene.source {
             Some(path) => format!("uploading the {n} triangles of {}", path.display()),
@@ -838,7 +846,7 @@ impl Renderer {
             }));
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
-        self.flag_grid_shadows(scene, &mut setup);
+        self.set_frame_flags(scene, &mut setup);
         let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
@@ -950,10 +958,14 @@ impl Renderer {
     }
 
     /// Marks a VSV frame that scatters to take its surface shadows from the shadow volume
-    /// ([`Renderer::grid_shadows`]).
-    fn flag_grid_shadows(&self, scene: &Scene, setup: &mut FrameSetup) {
+    /// ([`Renderer::grid_shadows`]), and a frame whose Cull tests large triangles' blocks of planes
+    /// ([`Renderer::hidden_blocks`]).
+    fn set_frame_flags(&self, scene: &Scene, setup: &mut FrameSetup) {
         if self.grid_shadows && setup.method == Method::Vsv && scene.needs_scattering() {
             setup.uniforms.image.w |= frame::FLAG_GRID_SHADOWS;
+        }
+        if self.hidden_blocks {
+            setup.uniforms.image.w |= frame::FLAG_HIDDEN_BLOCKS;
         }
     }
 
@@ -974,7 +986,7 @@ impl Renderer {
             return false;
         }
         let Ok(mut setup) = FrameSetup::with_pruning(scene, width, height, method, self.prune) else { return false };
-        self.flag_grid_shadows(scene, &mut setup);
+        self.set_frame_flags(scene, &mut setup);
         if self.variant != Some(setup.variant(&scene.medium.phase)) {
             return false;
         }

@@ -37,6 +37,7 @@ bindings! {
         blocks: Kind::Storage,
         counters: Kind::Storage,
         plane_rays: Kind::Storage,
+        hidden: Kind::Storage,
     }
 }
 
@@ -114,6 +115,7 @@ impl Voxelize {
                     blocks: l.blocks.as_entire_binding(),
                     counters: cull.counters.as_entire_binding(),
                     plane_rays: plane_rays.as_entire_binding(),
+                    hidden: l.hidden.as_entire_binding(),
                 };
                 b.bind(device, &format!("Voxelize::bind_group[{i}]"), &self.layout)
             })
