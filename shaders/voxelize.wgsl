@@ -184,7 +184,7 @@ fn main(
     let found = find_item(first);
     var slot = found.x;
     var rec = records[slot];
-    var hid = hidden[slot];
+    var hid = hidden_of(slot);
     var per_plane = word_groups(f, rec.w >> 16u);
     // The triangle's vertices, loaded again only when the run moves on to the next triangle: a
     // thread's items are mostly one triangle's planes (three vector loads fewer per item; on the
@@ -205,7 +205,7 @@ fn main(
                 within -= n;
                 slot++;
                 rec = records[slot];
-                hid = hidden[slot];
+                hid = hidden_of(slot);
                 per_plane = word_groups(f, rec.w >> 16u);
             }
             if (slot != before) { tri = triangle(rec.x); }
@@ -221,6 +221,13 @@ fn main(
             voxelize_item(rec, plane, within - plane * per_plane, tri);
         }
     }
+}
+
+// Kept triangle `slot`'s hidden blocks; none where Cull tests none (pipeline constants: it leaves
+// `hidden` unwritten there).
+fn hidden_of(slot: u32) -> u32 {
+    if (POINT_LIGHT || GRID_SHADOWS || CARTESIAN) { return 0u; }
+    return hidden[slot];
 }
 
 // Threads per SIMD group on llvmpipe (8 lanes of 32 bits); a GPU runs one item per thread, where

@@ -85,7 +85,8 @@ impl Voxelize {
                 module,
                 &layout,
                 ["main"],
-                Specialised::LightAndGrid,
+                // (Grid shadows too: Cull tests no blocks in their frames, `hidden_of`.)
+                Specialised::LightGridAndSurfaceShadows,
             ),
             layout,
             bind_groups: Vec::new(),
