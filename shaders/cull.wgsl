@@ -254,10 +254,9 @@ fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_ind
 const PAIRS: u32 = 2048u;
 var<workgroup> pair_count: atomic<u32>;
 
-// Whether the frame tests blocks: asked to (FLAG_HIDDEN_BLOCKS), a sun with a pyramid, the
-// epipolar grid, and blocks narrower than 45 degrees.
+// Whether a sun's frame tests blocks (`hidden_blocks` leaves out the others): asked to
+// (FLAG_HIDDEN_BLOCKS), a pyramid to read, and blocks narrower than 45 degrees.
 fn tests_blocks() -> bool {
-    if (POINT_LIGHT || GRID_SHADOWS || CARTESIAN) { return false; }
     let asked = (f.image.w & FLAG_HIDDEN_BLOCKS) != 0u;
     return asked && f.work.z != 0u && f32(HIDDEN_BLOCK) * f.b2.w / f32(f.grid.x) <= 0.7853982;
 }
@@ -352,28 +351,23 @@ fn block_hidden(slot: u32, b: u32) -> bool {
     part = part_add(part, c2, dot(t.p2, n_lo) >= 0.0 && dot(t.p2, n_hi) <= 0.0 && dot(t.p2, m) >= 0.0);
     // Nothing of the triangle in these planes: nothing to skip (and no box to test).
     if (!(part.lo.x <= part.hi.x)) { return false; }
-    let n = sun.texels;
-    let lo = floor(part.lo) - 1.0;
-    let hi = floor(part.hi) + 1.0;
-    if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; }
-    return pyramid_max(vec2u(lo), vec2u(hi), u32(n), f.work.z) < part.depth - margin;
+    return box_hidden(part.lo, part.hi, part.depth - margin, sun.texels, f.work.z);
 }
 
-// A point's map texel coordinates (xy, texel i spanning [i, i + 1)) and depth (z).
+// A point in the sun's map (hidden.wgsl `map_point`).
 fn sun_point(p: vec3f) -> vec3f {
-    let c = (sun.matrix * vec4f(p, 1.0)).xyz;
-    return vec3f(vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * sun.texels, c.z);
+    return map_point(sun.matrix, sun.texels, p);
 }
 
 // The normal of the plane at plane coordinate x (at angle phi(x), common.wgsl), and the direction
 // of its half away from the axis.
 fn plane_normal(x: f32) -> vec3f {
-    let phi = f.b1.w + x * f.b2.w / f32(f.grid.x);
+    let phi = phi_of_plane(f, x);
     return f.b2.xyz * cos(phi) - f.b1.xyz * sin(phi);
 }
 
 fn plane_half(x: f32) -> vec3f {
-    let phi = f.b1.w + x * f.b2.w / f32(f.grid.x);
+    let phi = phi_of_plane(f, x);
     return f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
 }
 

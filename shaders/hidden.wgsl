@@ -37,21 +37,31 @@ fn pyramid_column(i: u32) -> vec4f {
 // side, `coarsest` the pyramid's coarsest level (0: no pyramid, nothing is hidden).
 fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
     if (coarsest == 0u) { return false; }
-    let c0 = (m * vec4f(p0, 1.0)).xyz;
-    let c1 = (m * vec4f(p1, 1.0)).xyz;
-    let c2 = (m * vec4f(p2, 1.0)).xyz;
-    // Texel coordinates, as shadow_lookup.wgsl's: texel i spans [i, i + 1).
-    let t0 = vec2f(c0.x * 0.5 + 0.5, 0.5 - c0.y * 0.5) * n;
-    let t1 = vec2f(c1.x * 0.5 + 0.5, 0.5 - c1.y * 0.5) * n;
-    let t2 = vec2f(c2.x * 0.5 + 0.5, 0.5 - c2.y * 0.5) * n;
-    // The texels the footprint touches and a ring of one around them.
-    let lo = floor(min(t0, min(t1, t2))) - 1.0;
-    let hi = floor(max(t0, max(t1, t2))) + 1.0;
-    if (!(all(lo >= vec2f(0.0)) && all(hi <= vec2f(n - 1.0)))) { return false; } // also NaN
+    let c0 = map_point(m, n, p0);
+    let c1 = map_point(m, n, p1);
+    let c2 = map_point(m, n, p2);
     // A margin of a few float steps of depth 1 (the rasterizer's own depth at a texel centre may
     // round below the vertices' least), and a steep sliver's slope past its snapped edges.
-    let margin = depth_margin(t0, t1, t2, vec3f(c0.z, c1.z, c2.z), 4e-6);
-    return pyramid_max(vec2u(lo), vec2u(hi), u32(n), coarsest) < min(c0.z, min(c1.z, c2.z)) - margin;
+    let margin = depth_margin(c0.xy, c1.xy, c2.xy, vec3f(c0.z, c1.z, c2.z), 4e-6);
+    let lo = min(c0.xy, min(c1.xy, c2.xy));
+    let hi = max(c0.xy, max(c1.xy, c2.xy));
+    return box_hidden(lo, hi, min(c0.z, min(c1.z, c2.z)) - margin, n, coarsest);
+}
+
+// Point p under the map's view-projection m: texel coordinates (xy, as shadow_lookup.wgsl's: texel
+// i spans [i, i + 1), for a map of n texels per side) and depth (z).
+fn map_point(m: mat4x4f, n: f32, p: vec3f) -> vec3f {
+    let c = (m * vec4f(p, 1.0)).xyz;
+    return vec3f(vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * n, c.z);
+}
+
+// Whether every texel the box [lo, hi] (texel coordinates) touches, and a ring of one around them,
+// holds a depth nearer than `nearest`; false for a box reaching past the map's edge (also NaN).
+fn box_hidden(lo: vec2f, hi: vec2f, nearest: f32, n: f32, coarsest: u32) -> bool {
+    let a = floor(lo) - 1.0;
+    let b = floor(hi) + 1.0;
+    if (!(all(a >= vec2f(0.0)) && all(b <= vec2f(n - 1.0)))) { return false; }
+    return pyramid_max(vec2u(a), vec2u(b), u32(n), coarsest) < nearest;
 }
 
 // How far outside a triangle's edges the rasterizer may take a texel (or pixel) centre as covered:
