@@ -1,8 +1,9 @@
 // cull.wgsl: which triangles can shadow a visible point, and the balanced work list Voxelize runs.
 //
-// `cull` (one thread per run of f.work.x triangles: 1 on a GPU, 64 on a CPU): the triangle's
-// footprint in light space, i.e. the planes x
-// whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
+// `cull` (one thread per run of f.work.x triangles: 1 on a GPU, 64 on a CPU, a SIMD group's runs
+// interleaved; the cheap tests, zero area and a solid's face turned away, in a loop of their own
+// that moves on to the next triangle they keep): the triangle's footprint in light space, i.e. the
+// planes x whose centre angle its arc around the eye-light axis may hold (triangle_bounds.wgsl: the
 // conservative cell range, two ranges across the seam at phi = 0, all planes when the axis pierces
 // it) times the 32-bit words of bins whose centre z its z range holds. A triangle is dropped when
 // that footprint is empty: outside the visible wedge, past the last visible ray, or outside the
@@ -108,6 +109,9 @@ struct Sun {
 }
 var<private> sun: Sun;
 
+// Threads per SIMD group on llvmpipe (8 lanes of 32 bits), as Voxelize's LANES.
+const CULL_LANES: u32 = 8u;
+
 // Why a triangle is dropped, or its record and items.
 struct Kept {
     // 0: kept, 1: culled by z, 2: culled by rays or planes, 3: a solid's face away from the light,
@@ -117,23 +121,37 @@ struct Kept {
     items: u32,
 }
 
-fn cull_one(tri: u32) -> Kept {
-    // A triangle of zero area hides no light ray: no work for it (loaders drop them too).
-    var k = Kept(2u, vec4u(0u), 0u);
-    // The vertices are read once and handed on to the bounds.
-    let v0 = tris[3u * tri];
-    let p0 = v0.xyz;
-    let p1 = tris[3u * tri + 1u].xyz;
-    let p2 = tris[3u * tri + 2u].xyz;
-    let n = cross(p1 - p0, p2 - p0);
-    if (all(n == vec3f(0.0))) { return k; }
-    // A closed mesh's face turned away from a light outside it: the light's rays enter the solid
-    // through a face toward the light first, and the scan shadows everything behind that hit
-    // (src/scene/solid.rs). Edge-on faces (dot 0) are kept.
-    k.why = 3u;
+// A triangle's vertices (the first one's w its mesh, as a float).
+struct Verts {
+    v0: vec4f,
+    p1: vec3f,
+    p2: vec3f,
+}
+
+fn load_triangle(tri: u32) -> Verts {
+    return Verts(tris[3u * tri], tris[3u * tri + 1u].xyz, tris[3u * tri + 2u].xyz);
+}
+
+// Why the cheap tests drop a triangle (Kept::why), 0 when they keep it. A triangle of zero area
+// hides no light ray: no work for it (loaders drop them too). A closed mesh's face turned away
+// from a light outside it: the light's rays enter the solid through a face toward the light
+// first, and the scan shadows everything behind that hit (src/scene/solid.rs). Edge-on faces
+// (dot 0) are kept.
+fn cheap_cull(t: Verts) -> u32 {
+    let p0 = t.v0.xyz;
+    let n = cross(t.p1 - p0, t.p2 - p0);
+    if (all(n == vec3f(0.0))) { return 2u; }
     let to_light = select(f.light.xyz, f.light.xyz - p0, is_point_light());
-    if (sides[u32(v0.w)] * dot(n, to_light) < 0.0) { return k; }
-    k.why = 2u;
+    if (sides[u32(t.v0.w)] * dot(n, to_light) < 0.0) { return 3u; }
+    return 0u;
+}
+
+// The rest of the tests, for a triangle cheap_cull keeps.
+fn cull_one(tri: u32, t: Verts) -> Kept {
+    var k = Kept(2u, vec4u(0u), 0u);
+    let p0 = t.v0.xyz;
+    let p1 = t.p1;
+    let p2 = t.p2;
     let rects = triangle_rects(p0, p1, p2);
     if (rects.a.x >= rects.a.z) { return k; }
     let z = triangle_z_range(p0, p1, p2);
@@ -164,12 +182,34 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     // records hold indices into it.
     let count = arrayLength(&tris) / 3u;
     let run = max(f.work.x, 1u);
-    let first = (id.x + id.y * groups.x * 64u) * run;
-    let last = min(first + run, count);
+    // A group of CULL_LANES threads takes CULL_LANES x run consecutive triangles, interleaved: at
+    // every step its lanes hold neighbouring triangles, alike in facing, so that the skip loop
+    // below moves them on together.
+    let thread = id.x + id.y * groups.x * 64u;
+    let lane = thread % CULL_LANES;
+    let first = (thread - lane) * run + lane;
+    let last = min((thread - lane + CULL_LANES) * run, count);
     // Culled counts by reason 1 to 4, in a vector's lanes (no private array, architecture.md).
     var culled = vec4u(0u);
-    for (var tri = first; tri < last; tri++) {
-        let k = cull_one(tri);
+    // The cheap tests first, in a loop of their own that runs on to the next triangle they keep:
+    // llvmpipe runs the whole of a loop's body for every lane of a SIMD group, whether a lane
+    // takes a branch or not (docs/results.md, session 29), so with one loop the faces turned away
+    // from the light paid for every test. A lane's run of triangles is mostly one mesh's
+    // neighbours, alike in facing; the million-triangle room's spheres turn half their faces
+    // away (session 38).
+    var tri = first;
+    loop {
+        var t: Verts;
+        loop {
+            if (tri >= last) { break; }
+            t = load_triangle(tri);
+            let why = cheap_cull(t);
+            if (why == 0u) { break; }
+            culled += vec4u(vec4u(why) == vec4u(1u, 2u, 3u, 4u));
+            tri += CULL_LANES;
+        }
+        if (tri >= last) { break; }
+        let k = cull_one(tri, t);
         if (k.why == 0u) {
             let slot = atomicAdd(&counters[0], 1u);
             records[slot] = k.record;
@@ -177,6 +217,7 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
         } else {
             culled += vec4u(vec4u(k.why) == vec4u(1u, 2u, 3u, 4u));
         }
+        tri += CULL_LANES;
     }
     if (culled.x > 0u) { atomicAdd(&counters[1], culled.x); }
     if (culled.y > 0u) { atomicAdd(&counters[2], culled.y); }
