@@ -50,8 +50,10 @@
 //   place(t) = sum of keep(s) over s < t,
 //
 // and run r of meshes (triangles [s_r, e_r)) draws indices 3 place(s_r) .. 3 place(e_r). Three
-// steps: `mark` (a thread per 16 triangles, a workgroup per block of 1024: the kept triangles as a
-// bit mask per thread and their prefix within the block), `places` (one workgroup: the blocks'
+// steps: `mark` (a thread per 16 triangles, a SIMD group's interleaved so that its lanes hold
+// neighbours, a workgroup per block of 1024: the kept triangles as a bit mask per thread and their
+// prefix within the block; the turned-away and between-the-centres tests in a loop of their own
+// that moves on to the next triangle they leave to the rest), `places` (one workgroup: the blocks'
 // prefix, and the runs' indirect draw arguments) and `compact` (the copies). Emptying them in place
 // as (i0, i0, i0) instead (sessions 21-27) still sent them through llvmpipe's single-threaded
 // index fetch and primitive assembly: leaving them out took a million-triangle room's Surface from
@@ -121,37 +123,57 @@ fn misses_centres(lo: f32, hi: f32, n: u32) -> bool {
     return first > last;
 }
 
-// Whether triangle t would draw nothing.
-fn empty(t: u32) -> bool {
+// A triangle after the cheap tests: `state` 0 draws nothing (turned away, or no pixel centre in
+// its box), 1 draws (a vertex at or behind the eye: the near plane clips it; no test applies), 2
+// needs the rest of the tests (`empty_rest`), with its vertices in pixels and their depths.
+struct Projected {
+    state: u32,
+    pa: vec2f,
+    pb: vec2f,
+    pc: vec2f,
+    z: vec3f,
+}
+
+fn project(t: u32) -> Projected {
+    var o = Projected(0u, vec2f(0.0), vec2f(0.0), vec2f(0.0), vec3f(0.0));
     let v0 = tris[3u * t];
     let p0 = v0.xyz;
     let p1 = tris[3u * t + 1u].xyz;
     let p2 = tris[3u * t + 2u].xyz;
+    if (turned_away(u32(v0.w), p0, p1, p2)) { return o; }
     let a = clip_of(p0);
     let b = clip_of(p1);
     let c = clip_of(p2);
-    var empty = turned_away(u32(v0.w), p0, p1, p2);
-    if (!empty && min(a.w, min(b.w, c.w)) > 0.0) {
-        let pa = pixel_of(a);
-        let pb = pixel_of(b);
-        let pc = pixel_of(c);
-        let lo = min(pa, min(pb, pc));
-        let hi = max(pa, max(pb, pc));
-        empty = misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y);
-        if (!empty) {
-            let z = vec3f(a.z / a.w, b.z / b.w, c.z / c.w);
-            // The nearest depth the rasterizer can give the triangle at a pixel it covers.
-            let nearest = min(z.x, min(z.y, z.z)) - depth_margin(pa, pb, pc, z, 1e-6);
-            let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
-            let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
-            if (all(last - first <= vec2f(2.0))) {
-                empty = !shows_a_centre(pa, pb, pc, first, last, nearest);
-            } else if (f.work.w != 0u) {
-                empty = pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w) < nearest;
-            }
-        }
+    if (!(min(a.w, min(b.w, c.w)) > 0.0)) {
+        o.state = 1u;
+        return o;
     }
-    return empty;
+    o.pa = pixel_of(a);
+    o.pb = pixel_of(b);
+    o.pc = pixel_of(c);
+    let lo = min(o.pa, min(o.pb, o.pc));
+    let hi = max(o.pa, max(o.pb, o.pc));
+    if (misses_centres(lo.x, hi.x, f.image.x) || misses_centres(lo.y, hi.y, f.image.y)) { return o; }
+    o.state = 2u;
+    o.z = vec3f(a.z / a.w, b.z / b.w, c.z / c.w);
+    return o;
+}
+
+// Whether a triangle `project` left at state 2 draws nothing after all: it covers none of the
+// pixel centres of a small box, or an earlier frame's depth hides it.
+fn empty_rest(q: Projected) -> bool {
+    let lo = min(q.pa, min(q.pb, q.pc));
+    let hi = max(q.pa, max(q.pb, q.pc));
+    // The nearest depth the rasterizer can give the triangle at a pixel it covers.
+    let nearest = min(q.z.x, min(q.z.y, q.z.z)) - depth_margin(q.pa, q.pb, q.pc, q.z, 1e-6);
+    let first = max(ceil(lo - 0.5 - EPS), vec2f(0.0));
+    let last = min(floor(hi - 0.5 + EPS), vec2f(f.image.xy) - 1.0);
+    if (all(last - first <= vec2f(2.0))) {
+        return !shows_a_centre(q.pa, q.pb, q.pc, first, last, nearest);
+    } else if (f.work.w != 0u) {
+        return pyramid_max(vec2u(first), vec2u(last), max(f.image.x, f.image.y), f.work.w) < nearest;
+    }
+    return false;
 }
 
 // Whether a small triangle (pixel coordinates pa, pb, pc; the pixel centres first..last of its box,
@@ -215,10 +237,30 @@ fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u
     // the same for the whole workgroup, so the barriers below stay uniform.
     if (block * BLOCK >= n) { return; }
     let thread = block * 64u + lid;
-    let first = thread * PER_THREAD;
+    // The cheap tests in a loop of their own that runs on to the next triangle they leave to the
+    // rest: llvmpipe runs the whole of a loop's body for every lane of a SIMD group, taken or not
+    // (docs/results.md, session 29), so in one loop the triangles turned away or between the
+    // pixel centres paid for the small triangles' centre tests too. The lanes hold neighbouring
+    // triangles (`interleaved`), alike in facing and size, so they skip together.
+    let base = interleaved(thread, 0u);
     var mask = 0u;
-    for (var i = 0u; i < PER_THREAD; i++) {
-        if (first + i < n && !empty(first + i)) { mask |= 1u << i; }
+    var i = 0u;
+    loop {
+        var q: Projected;
+        loop {
+            if (i >= PER_THREAD) { break; }
+            let t = base + i * LANES;
+            if (t >= n) {
+                i = PER_THREAD;
+                break;
+            }
+            q = project(t);
+            if (q.state != 0u) { break; }
+            i++;
+        }
+        if (i >= PER_THREAD) { break; }
+        if (q.state == 1u || !empty_rest(q)) { mask |= 1u << i; }
+        i++;
     }
     let count = countOneBits(mask);
     partial[lid] = count;
@@ -227,12 +269,33 @@ fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u
     if (lid == 63u) { blocks[block] = partial[63]; }
 }
 
-// Kept triangles before triangle t (t up to the count; `blocks` already summed).
+// Threads per SIMD group on llvmpipe (8 lanes of 32 bits). A group of LANES threads takes LANES x
+// PER_THREAD consecutive triangles, interleaved: thread lane l of the group holds triangles
+// l, l + LANES, l + 2 LANES, ... of its stretch, bit i of its mask the i-th of them.
+const LANES: u32 = 8u;
+
+// Thread `thread`'s i-th triangle.
+fn interleaved(thread: u32, i: u32) -> u32 {
+    let lane = thread % LANES;
+    return (thread - lane) * PER_THREAD + lane + i * LANES;
+}
+
+// Kept triangles before triangle t (t up to the count; `blocks` already summed): the block's,
+// then the group's earlier threads' (their scan), then each lane's bits before t's position.
 fn place(t: u32) -> u32 {
     let n = triangle_count();
     if (t >= n) { return blocks[(n + BLOCK - 1u) / BLOCK]; }
-    let th = threads[t / PER_THREAD];
-    return blocks[t / BLOCK] + th.y + countOneBits(th.x & ((1u << (t % PER_THREAD)) - 1u));
+    let stretch = t / (LANES * PER_THREAD);
+    let within = t % (LANES * PER_THREAD);
+    let i = within / LANES;
+    let lane = within % LANES;
+    let group = stretch * LANES;
+    var before = blocks[t / BLOCK] + threads[group].y;
+    for (var l = 0u; l < LANES; l++) {
+        let bits = select(i, i + 1u, l < lane);
+        before += countOneBits(threads[group + l].x & ((1u << bits) - 1u));
+    }
+    return before;
 }
 
 // The blocks' exclusive prefix (and the total after them), then each run's draw arguments.
@@ -269,15 +332,26 @@ fn compact(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: ve
     let block = wg.x + wg.y * groups.x;
     if (block * BLOCK >= triangle_count()) { return; }
     let thread = block * 64u + lid;
-    let th = threads[thread];
-    var at = blocks[block] + th.y;
-    var mask = th.x;
+    let lane = thread % LANES;
+    let group = thread - lane;
+    // The group's masks, read once: a kept triangle's place counts the bits before it in each.
+    let lo = vec4u(threads[group].x, threads[group + 1u].x, threads[group + 2u].x, threads[group + 3u].x);
+    let hi = vec4u(threads[group + 4u].x, threads[group + 5u].x, threads[group + 6u].x, threads[group + 7u].x);
+    let start = blocks[block] + threads[group].y;
+    let lanes_lo = vec4u(0u, 1u, 2u, 3u);
+    let lanes_hi = vec4u(4u, 5u, 6u, 7u);
+    var mask = threads[thread].x;
     while (mask != 0u) {
-        let t = thread * PER_THREAD + firstTrailingBit(mask);
+        let i = firstTrailingBit(mask);
+        let t = interleaved(thread, i);
         mask &= mask - 1u;
+        // Lanes before this one count their bits up to and with position i, the others before it.
+        let bits_lo = select(vec4u(i), vec4u(i + 1u), lanes_lo < vec4u(lane));
+        let bits_hi = select(vec4u(i), vec4u(i + 1u), lanes_hi < vec4u(lane));
+        let before = countOneBits(lo & ((vec4u(1u) << bits_lo) - 1u)) + countOneBits(hi & ((vec4u(1u) << bits_hi) - 1u));
+        let at = start + before.x + before.y + before.z + before.w;
         lists[3u * at] = indices[3u * t];
         lists[3u * at + 1u] = indices[3u * t + 1u];
         lists[3u * at + 2u] = indices[3u * t + 2u];
-        at++;
     }
 }
