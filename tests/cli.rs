@@ -394,7 +394,8 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
 /// `epivox ab` without `--b`: B runs A's shaders with its own renderer settings. A Voxelize run
 /// of 3 items sets the same bits (the work list's shape changes nothing), the surfaces' shadows
 /// from the grid instead of the map, or from a coarser map, change the final image, and B's
-/// description names the flags; a run or a map size out of its range is named.
+/// description names the flags; a run or a map size out of its range is named; Surface without
+/// the eye's list draws the same images.
 #[test]
 fn ab_times_the_b_sides_settings_against_a() {
     if !has_adapter() {
@@ -421,4 +422,9 @@ fn ab_times_the_b_sides_settings_against_a() {
     assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.ends_with("with --b-shadow-map 64")), "{j}");
     let err = fails(&["ab", "--b-shadow-map", "20"], &[]);
     assert!(err.contains("shadow-map") && err.contains("64"), "{err}");
+    // Surface without the eye's list draws the same images.
+    let j = run(&["--b-eye-list", "off"]);
+    assert_eq!(j["scatter"]["same"], true, "{j}");
+    assert_eq!(j["final"]["same"], true, "{j}");
+    assert!(j["b"]["shaders"].as_str().is_some_and(|s| s.ends_with("with --b-eye-list off")), "{j}");
 }

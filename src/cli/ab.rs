@@ -55,7 +55,7 @@ pub struct AbArgs {
 }
 
 /// What the B side's renderer does differently from A's besides its shaders: the same choices as
-/// `--scan`, `--surface-shadows` and `--pixels` (which set both sides), for B alone, the
+/// `--scan`, `--surface-shadows`, `--pixels` and `--eye-list` (which set both sides), for B alone, the
 /// Voxelize work list's runs and the shadow map's size. A change to the renderer's settings is
 /// then timed against the current ones in one process, like a shader edit (two binaries in
 /// alternating processes mislead on a shared machine: docs/results.md, session 35).
@@ -70,6 +70,9 @@ pub struct BSettings {
     /// B's --pixels.
     #[arg(id = "b_pixels", long = "b-pixels", value_enum, value_name = "PIXELS")]
     pub pixels: Option<super::Pixels>,
+    /// B's --eye-list.
+    #[arg(id = "b_eye_list", long = "b-eye-list", value_enum, value_name = "LIST")]
+    pub eye_list: Option<super::EyeList>,
     #[arg(id = "b_voxelize_run", long = "b-voxelize-run", value_name = "ITEMS",
           value_parser = |s: &str| super::parse_count::<u32>(&Measure::VOXELIZE_RUN, s),
           help = super::spec_help("B's Voxelize work items a thread (and Cull's triangles a thread)", &Measure::VOXELIZE_RUN))]
@@ -86,8 +89,12 @@ pub struct BSettings {
 impl BSettings {
     /// Sets B's renderer apart from A's, after the choices both sides share.
     fn apply(&self, renderer: &mut Renderer) -> Result<()> {
-        let choices =
-            super::PassChoices { scan: self.scan, surface_shadows: self.surface_shadows, pixels: self.pixels };
+        let choices = super::PassChoices {
+            scan: self.scan,
+            surface_shadows: self.surface_shadows,
+            pixels: self.pixels,
+            eye_list: self.eye_list,
+        };
         choices.apply(renderer);
         if let Some(run) = self.voxelize_run {
             renderer.set_voxelize_work(run, renderer.voxelize_work().1);
@@ -112,6 +119,9 @@ impl BSettings {
         }
         if let Some(v) = &self.pixels {
             flags.push(format!("--b-pixels {}", name(v)));
+        }
+        if let Some(v) = &self.eye_list {
+            flags.push(format!("--b-eye-list {}", name(v)));
         }
         if let Some(run) = self.voxelize_run {
             flags.push(format!("--b-voxelize-run {run}"));

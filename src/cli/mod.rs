@@ -105,6 +105,16 @@ pub enum Pixels {
     All,
 }
 
+/// Whether Surface draws the eye's list (`Renderer::surface_culling`).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
+pub enum EyeList {
+    /// The triangles that can draw something, compacted by a compute pass first (surface_cull.wgsl):
+    /// the default.
+    On,
+    /// Every triangle, as the scene holds them.
+    Off,
+}
+
 /// How the GPU frame's passes run, for `render` and `bench` alike (the renderer's own defaults
 /// where a flag is left out).
 #[derive(clap::Args)]
@@ -121,6 +131,10 @@ pub struct PassChoices {
     /// every fourth one along the epipolar lines and then those their neighbours cannot stand for.
     #[arg(long, value_enum)]
     pub pixels: Option<Pixels>,
+    /// Whether Surface draws only the triangles that can draw something, found by a compute pass
+    /// first [default: on]. The images are the same either way.
+    #[arg(long, value_enum)]
+    pub eye_list: Option<EyeList>,
 }
 
 impl PassChoices {
@@ -134,6 +148,9 @@ impl PassChoices {
         }
         if let Some(pixels) = self.pixels {
             renderer.adaptive_pixels = pixels == Pixels::Adaptive;
+        }
+        if let Some(list) = self.eye_list {
+            renderer.surface_culling = list == EyeList::On;
         }
     }
 }
