@@ -280,22 +280,36 @@ fn interleaved(thread: u32, i: u32) -> u32 {
     return (thread - lane) * PER_THREAD + lane + i * LANES;
 }
 
+// The masks of the group of LANES threads from thread `group` on, lanes 0-3 and 4-7.
+struct GroupMasks {
+    lo: vec4u,
+    hi: vec4u,
+}
+
+fn group_masks(group: u32) -> GroupMasks {
+    return GroupMasks(
+        vec4u(threads[group].x, threads[group + 1u].x, threads[group + 2u].x, threads[group + 3u].x),
+        vec4u(threads[group + 4u].x, threads[group + 5u].x, threads[group + 6u].x, threads[group + 7u].x),
+    );
+}
+
+// Kept triangles of a group before the i-th triangle of its lane `lane`: the lanes before it
+// count their bits up to and with position i, the others (and it) those before i.
+fn kept_before(m: GroupMasks, lane: u32, i: u32) -> u32 {
+    let bits_lo = select(vec4u(i), vec4u(i + 1u), vec4u(0u, 1u, 2u, 3u) < vec4u(lane));
+    let bits_hi = select(vec4u(i), vec4u(i + 1u), vec4u(4u, 5u, 6u, 7u) < vec4u(lane));
+    let n = countOneBits(m.lo & ((vec4u(1u) << bits_lo) - 1u)) + countOneBits(m.hi & ((vec4u(1u) << bits_hi) - 1u));
+    return n.x + n.y + n.z + n.w;
+}
+
 // Kept triangles before triangle t (t up to the count; `blocks` already summed): the block's,
-// then the group's earlier threads' (their scan), then each lane's bits before t's position.
+// then the group's earlier threads' (their scan), then the group's bits before t.
 fn place(t: u32) -> u32 {
     let n = triangle_count();
     if (t >= n) { return blocks[(n + BLOCK - 1u) / BLOCK]; }
-    let stretch = t / (LANES * PER_THREAD);
     let within = t % (LANES * PER_THREAD);
-    let i = within / LANES;
-    let lane = within % LANES;
-    let group = stretch * LANES;
-    var before = blocks[t / BLOCK] + threads[group].y;
-    for (var l = 0u; l < LANES; l++) {
-        let bits = select(i, i + 1u, l < lane);
-        before += countOneBits(threads[group + l].x & ((1u << bits) - 1u));
-    }
-    return before;
+    let group = t / (LANES * PER_THREAD) * LANES;
+    return blocks[t / BLOCK] + threads[group].y + kept_before(group_masks(group), within % LANES, within / LANES);
 }
 
 // The blocks' exclusive prefix (and the total after them), then each run's draw arguments.
@@ -334,22 +348,15 @@ fn compact(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: ve
     let thread = block * 64u + lid;
     let lane = thread % LANES;
     let group = thread - lane;
-    // The group's masks, read once: a kept triangle's place counts the bits before it in each.
-    let lo = vec4u(threads[group].x, threads[group + 1u].x, threads[group + 2u].x, threads[group + 3u].x);
-    let hi = vec4u(threads[group + 4u].x, threads[group + 5u].x, threads[group + 6u].x, threads[group + 7u].x);
+    // The group's masks, read once for all of the thread's kept triangles.
+    let masks = group_masks(group);
     let start = blocks[block] + threads[group].y;
-    let lanes_lo = vec4u(0u, 1u, 2u, 3u);
-    let lanes_hi = vec4u(4u, 5u, 6u, 7u);
     var mask = threads[thread].x;
     while (mask != 0u) {
         let i = firstTrailingBit(mask);
-        let t = interleaved(thread, i);
         mask &= mask - 1u;
-        // Lanes before this one count their bits up to and with position i, the others before it.
-        let bits_lo = select(vec4u(i), vec4u(i + 1u), lanes_lo < vec4u(lane));
-        let bits_hi = select(vec4u(i), vec4u(i + 1u), lanes_hi < vec4u(lane));
-        let before = countOneBits(lo & ((vec4u(1u) << bits_lo) - 1u)) + countOneBits(hi & ((vec4u(1u) << bits_hi) - 1u));
-        let at = start + before.x + before.y + before.z + before.w;
+        let t = interleaved(thread, i);
+        let at = start + kept_before(masks, lane, i);
         lists[3u * at] = indices[3u * t];
         lists[3u * at + 1u] = indices[3u * t + 1u];
         lists[3u * at + 2u] = indices[3u * t + 2u];
