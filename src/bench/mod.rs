@@ -379,7 +379,8 @@ pub struct BenchResults {
     pub width: u32,
     pub height: u32,
     pub adapter: String,
-    /// "GPU timestamps" or, on an adapter without them, "wall clock (a frame submitted and waited for)".
+    /// "GPU timestamps" (on a CPU adapter with what their per-pass shares are good to) or, on an
+    /// adapter without them, "wall clock (a frame submitted and waited for)".
     pub timing_source: &'static str,
     /// Rounds the error sweep was timed in ([`BenchOptions::rounds`]).
     pub rounds: usize,
@@ -1007,8 +1008,13 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         notes.push("the triangle and resolution sweeps were not run (--no-scaling)".into());
     }
 
-    let timing_source =
-        if renderer.ctx.timestamps { "GPU timestamps" } else { "wall clock (a frame submitted and waited for)" };
+    let timing_source = match (renderer.ctx.timestamps, renderer.ctx.info.device_type) {
+        // llvmpipe takes a timestamp at its next flush (src/gpu/timing.rs): a frame's total is
+        // exact, but a few ms can land in the pass before or after their own.
+        (true, wgpu::DeviceType::Cpu) => "GPU timestamps (a frame's total exact; on this CPU adapter a pass's share good to a few ms, docs/results.md session 38)",
+        (true, _) => "GPU timestamps",
+        (false, _) => "wall clock (a frame submitted and waited for)",
+    };
     let light = match scene.light {
         crate::params::Light::Point { position, intensity, radius } => {
             format!("point light at {position}, intensity {intensity}, radius {radius}")
