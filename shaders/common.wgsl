@@ -101,6 +101,11 @@ fn words_per_item(f: Frame) -> u32 {
     return max(f.work.y, 1u);
 }
 
+// Threads per SIMD group on llvmpipe (8 lanes of 32 bits). Voxelize, Cull and Surface's culling
+// hand a group's lanes neighbouring work (interleaved runs), so that lanes alike in their branches
+// and loops move together; a GPU runs one item per thread there, where it changes nothing.
+const LANES: u32 = 8u;
+
 // Planes per block of a large triangle's range that Cull tests against the sun's pyramid on its
 // own (cull.wgsl `hidden_blocks`); Voxelize skips the items of the blocks it finds hidden.
 const HIDDEN_BLOCK: u32 = 64u;
@@ -189,8 +194,18 @@ fn phi_of_dir(f: Frame, v: vec3f) -> f32 {
 }
 
 fn dir_of(f: Frame, phi: f32, gamma: f32) -> vec3f {
-    let n = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
-    return f.axis.xyz * cos(gamma) + n * sin(gamma);
+    return f.axis.xyz * cos(gamma) + plane_half(f, phi) * sin(gamma);
+}
+
+// The epipolar half-plane at angle phi around the axis, from the frame's basis b1, b2 across the
+// axis: the direction of its half away from the axis, and its normal (the plane's points p have
+// dot(p - eye, normal) = 0). Shared by Voxelize, Cull's hidden blocks and Integrate.
+fn plane_half(f: Frame, phi: f32) -> vec3f {
+    return f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
+}
+
+fn plane_normal(f: Frame, phi: f32) -> vec3f {
+    return f.b2.xyz * cos(phi) - f.b1.xyz * sin(phi);
 }
 
 // Continuous plane coordinate in [0, planes) (plane i covers [i, i+1)).

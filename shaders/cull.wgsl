@@ -109,9 +109,6 @@ struct Sun {
 }
 var<private> sun: Sun;
 
-// Threads per SIMD group on llvmpipe (8 lanes of 32 bits), as Voxelize's LANES.
-const CULL_LANES: u32 = 8u;
-
 // Why a triangle is dropped, or its record and items.
 struct Kept {
     // 0: kept, 1: culled by z, 2: culled by rays or planes, 3: a solid's face away from the light,
@@ -182,13 +179,13 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     // records hold indices into it.
     let count = arrayLength(&tris) / 3u;
     let run = max(f.work.x, 1u);
-    // A group of CULL_LANES threads takes CULL_LANES x run consecutive triangles, interleaved: at
+    // A group of LANES threads takes LANES x run consecutive triangles, interleaved: at
     // every step its lanes hold neighbouring triangles, alike in facing, so that the skip loop
     // below moves them on together.
     let thread = id.x + id.y * groups.x * 64u;
-    let lane = thread % CULL_LANES;
+    let lane = thread % LANES;
     let first = (thread - lane) * run + lane;
-    let last = min((thread - lane + CULL_LANES) * run, count);
+    let last = min((thread - lane + LANES) * run, count);
     // Culled counts by reason 1 to 4, in a vector's lanes (no private array, architecture.md).
     var culled = vec4u(0u);
     // The cheap tests first, in a loop of their own that runs on to the next triangle they keep:
@@ -205,7 +202,7 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
             let why = cheap_cull(t);
             if (why == 0u) { break; }
             culled += vec4u(vec4u(why) == vec4u(1u, 2u, 3u, 4u));
-            tri += CULL_LANES;
+            tri += LANES;
         }
         if (tri >= last) { break; }
         let k = cull_one(tri, t);
@@ -216,7 +213,7 @@ fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
         } else {
             culled += vec4u(vec4u(k.why) == vec4u(1u, 2u, 3u, 4u));
         }
-        tri += CULL_LANES;
+        tri += LANES;
     }
     if (culled.x > 0u) { atomicAdd(&counters[1], culled.x); }
     if (culled.y > 0u) { atomicAdd(&counters[2], culled.y); }
@@ -376,9 +373,9 @@ fn block_hidden(slot: u32, b: u32) -> bool {
     // The wedge from the block's first plane to the next block's (or the range's last).
     let x_lo = f32(rec.y + b * HIDDEN_BLOCK) + 0.5;
     let x_hi = f32(rec.y + min((b + 1u) * HIDDEN_BLOCK, rec.z - 1u)) + 0.5;
-    let n_lo = plane_normal(x_lo);
-    let n_hi = plane_normal(x_hi);
-    let m = plane_half(0.5 * (x_lo + x_hi));
+    let n_lo = plane_normal(f, phi_of_plane(f, x_lo));
+    let n_hi = plane_normal(f, phi_of_plane(f, x_hi));
+    let m = plane_half(f, phi_of_plane(f, 0.5 * (x_lo + x_hi)));
     var part = Part(vec2f(3.0e38), vec2f(-3.0e38), 3.0e38);
     let s_lo = plane_segment(t, n_lo);
     let s_hi = plane_segment(t, n_hi);
@@ -397,18 +394,6 @@ fn block_hidden(slot: u32, b: u32) -> bool {
 // A point in the sun's map (hidden.wgsl `map_point`).
 fn sun_point(p: vec3f) -> vec3f {
     return map_point(sun.matrix, sun.texels, p);
-}
-
-// The normal of the plane at plane coordinate x (at angle phi(x), common.wgsl), and the direction
-// of its half away from the axis.
-fn plane_normal(x: f32) -> vec3f {
-    let phi = phi_of_plane(f, x);
-    return f.b2.xyz * cos(phi) - f.b1.xyz * sin(phi);
-}
-
-fn plane_half(x: f32) -> vec3f {
-    let phi = phi_of_plane(f, x);
-    return f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
 }
 
 // A box in the map (texel coordinates) and the least depth of the points added to it (empty:

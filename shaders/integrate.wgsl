@@ -453,7 +453,7 @@ fn plane_lit(x: u32, b: f32) -> f32 {
     let lo = u32(clamp(j, 0.0, top));
     let hi = u32(clamp(j + 1.0, 0.0, top));
     let phi = phi_of_plane(f, f32(x) + 0.5);
-    let m = f.b1.xyz * cos(phi) + f.b2.xyz * sin(phi);
+    let m = plane_half(f, phi);
     let t = clamp((u - j - 0.5) / SURFACE_RAMP + 0.5, 0.0, 1.0);
     return mix(sample_lit(x, m, lo, offset), sample_lit(x, m, hi, offset), t);
 }

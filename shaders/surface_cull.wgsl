@@ -269,10 +269,9 @@ fn mark(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u
     if (lid == 63u) { blocks[block] = partial[63]; }
 }
 
-// Threads per SIMD group on llvmpipe (8 lanes of 32 bits). A group of LANES threads takes LANES x
-// PER_THREAD consecutive triangles, interleaved: thread lane l of the group holds triangles
-// l, l + LANES, l + 2 LANES, ... of its stretch, bit i of its mask the i-th of them.
-const LANES: u32 = 8u;
+// A SIMD group's LANES threads (common.wgsl) take LANES x PER_THREAD consecutive triangles,
+// interleaved: thread lane l of the group holds triangles l, l + LANES, l + 2 LANES, ... of its
+// stretch, bit i of its mask the i-th of them.
 
 // Thread `thread`'s i-th triangle.
 fn interleaved(thread: u32, i: u32) -> u32 {

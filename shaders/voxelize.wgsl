@@ -230,10 +230,6 @@ fn hidden_of(slot: u32) -> u32 {
     return hidden[slot];
 }
 
-// Threads per SIMD group on llvmpipe (8 lanes of 32 bits); a GPU runs one item per thread, where
-// the interleaving changes nothing.
-const LANES: u32 = 8u;
-
 // The stretch of the list workgroup `wg` takes: the even workgroups the first half of the list in
 // order, the odd ones the second half. A CPU adapter runs consecutive workgroups at the same time,
 // one a core; with consecutive stretches its cores ORed into the same lines of the grid (the list
@@ -293,10 +289,9 @@ fn voxelize_item(rec: vec4u, plane: u32, group: u32, p: Tri) {
     // Epipolar: the plane through the axis at the plane's centre angle, in 2-D coordinates
     // (u along the axis, v toward the half-plane side m), with the eye at the origin.
     let phi = f.b1.w + (f32(x) + 0.5) * scale.radians_per_plane;
-    let cs = vec2f(cos(phi), sin(phi));
     let a = f.axis.xyz;
-    let m = f.b1.xyz * cs.x + f.b2.xyz * cs.y;
-    let n = f.b2.xyz * cs.x - f.b1.xyz * cs.y;
+    let m = plane_half(f, phi);
+    let n = plane_normal(f, phi);
     let s = plane_segment(p, n);
     if (!s.ok) { return; }
     var sp = dot(s.p, m);

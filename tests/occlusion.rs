@@ -136,12 +136,7 @@ fn the_march_sees_the_same_map_without_the_hidden_triangles() {
 #[test]
 fn hidden_blocks_of_large_triangles_are_skipped_and_the_shadow_volume_is_the_same() {
     let Some(mut r) = renderer() else { return };
-    let root = std::env::var_os("EPIVOX_SHARED_SCENES")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes"));
-    let path = root.join("japanese_classroom");
-    let classroom = epivox::scene::load_scene(&path)
-        .unwrap_or_else(|e| panic!("the shared scenes must be beside the repository: {e}"));
+    let classroom = common::shared_scene("japanese_classroom");
     let frame = |r: &mut epivox::render::Renderer| {
         let out = r.render(&classroom, 128, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         let counts = r.cull_counts().unwrap_or_else(|e| panic!("{e}"));

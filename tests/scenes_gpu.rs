@@ -9,16 +9,7 @@ mod common;
 use common::*;
 use epivox::params::Grid;
 use epivox::render::Method;
-use epivox::scene::{builtin_scene, load_scene, Scene};
-use std::path::PathBuf;
-
-fn shared(rel: &str) -> Scene {
-    let root = std::env::var_os("EPIVOX_SHARED_SCENES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes"));
-    let p = root.join(rel);
-    load_scene(&p).unwrap_or_else(|e| panic!("the shared scenes must be beside the repository: {e}"))
-}
+use epivox::scene::{builtin_scene, Scene};
 
 fn check(scene: Scene, grid: Grid, size: u32, bound: f64) {
     let Some(mut r) = renderer() else { return };
@@ -54,7 +45,7 @@ fn builtin_scene_error_falls_with_the_grid() {
 #[test]
 fn cornell_box_matches_reference() {
     check(
-        shared("cornell_box/CornellBox-Original.gltf"),
+        shared_scene("cornell_box/CornellBox-Original.gltf"),
         Grid { planes: 512, rays: 512, bins: 128, ..Grid::default() },
         96,
         // Measured 1.3% (3.9% with the cell voxelizer).
@@ -65,7 +56,7 @@ fn cornell_box_matches_reference() {
 /// The bunny on a floor, lit from behind and above so that its shadow volume runs toward the eye.
 #[test]
 fn stanford_bunny_matches_reference() {
-    let mut scene = shared("stanford_bunny/bun_zipper.ply");
+    let mut scene = shared_scene("stanford_bunny/bun_zipper.ply");
     let b = scene.bounds();
     let (c, r) = (b.center(), b.radius());
     scene.meshes.push(quad(

@@ -89,8 +89,9 @@ impl CullLists {
         }
     }
 
-    /// Bytes per triangle of the lists (for the adapter's limits).
-    pub const BYTES_PER_TRIANGLE: u64 = 16;
+    /// Bytes per triangle of all the lists together (records, offsets, hidden blocks and the
+    /// blocks' pairs; `blocks` is a word per 1024), for the adapter's limits.
+    pub const BYTES_PER_TRIANGLE: u64 = 16 + 4 + 4 + Cull::PAIRS_PER_BLOCK * 4 / Cull::BLOCK as u64;
 }
 
 pub struct Cull {

@@ -679,15 +679,14 @@ impl Renderer {
         if self.geometry.as_ref().is_some_and(|g| g.fingerprint == scene.geometry_fingerprint()) {
             return Ok(());
         }
-        // The lists Cull fills hold 32 bytes per triangle of a chunk (records, offsets, hidden
-        // blocks and the blocks' pairs): past the adapter's largest buffer the scene cannot be
-        // voxelized at all.
+        // The lists Cull fills (CullLists::BYTES_PER_TRIANGLE per triangle of a chunk): past the
+        // adapter's largest buffer the scene cannot be voxelized at all.
         let n = scene.triangle_count() as u64;
         let l = self.ctx.device.limits();
         let per_chunk = l.max_storage_buffer_binding_size.min(l.max_buffer_size) / SceneGpu::TRIANGLE_BYTES;
         self.ctx.check_buffer(
             &format!("the work lists of {n} triangles"),
-            n.min(per_chunk) * (CullLists::BYTES_PER_TRIANGLE + 16),
+            n.min(per_chunk) * CullLists::BYTES_PER_TRIANGLE,
         )?;
         let during = match &scene.source {
             Some(path) => format!("uploading the {n} triangles of {}", path.display()),

@@ -22,6 +22,16 @@ pub fn renderer() -> Option<Renderer> {
     }
 }
 
+/// A shared third-party scene from `../shared/scenes` beside the repository (or
+/// `$EPIVOX_SHARED_SCENES`); panics when it is missing.
+pub fn shared_scene(rel: &str) -> Scene {
+    let root = std::env::var_os("EPIVOX_SHARED_SCENES")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes"));
+    epivox::scene::load_scene(&root.join(rel))
+        .unwrap_or_else(|e| panic!("the shared scenes must be beside the repository: {e}"))
+}
+
 // The scene builders are the library's, shared with the `check` cases.
 pub use epivox::scene::build::quad;
 use epivox::scene::build::{cuboid, haze, point, side_camera};
