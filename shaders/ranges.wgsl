@@ -30,15 +30,17 @@ fn visible_z(p: vec2u) -> f32 {
         if (t_s >= 0.0) { t = min(t, t_s); }
         return max(t, 0.0) * dot(v, f.cam_fwd.xyz);
     }
-    let gamma = angle_between(f.axis.xyz, v);
     if (is_point_light()) {
+        let gamma = angle_between(f.axis.xyz, v);
         if (t_s < 0.0) { return PI - gamma; }
         return z_along(f, gamma, t_s);
     }
     let span = box_span(f.eye.xyz, v, f.medium_min.xyz, f.medium_max.xyz);
     var t = span.y;
     if (t_s >= 0.0) { t = min(t, t_s); }
-    return max(t, 0.0) * sin(gamma);
+    // sin(gamma) of two unit vectors as |axis x v|: no angle, an atan2 and a sine less a pixel
+    // (the classroom's Ranges 0.78x on llvmpipe, 4 of 4 rounds; session 40).
+    return max(t, 0.0) * length(cross(f.axis.xyz, v));
 }
 
 var<workgroup> group_max: atomic<u32>;
