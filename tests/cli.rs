@@ -371,6 +371,8 @@ fn ab_times_two_shader_folders_and_tells_whether_the_images_differ() {
     assert_eq!(total.len(), 2, "{j}");
     assert!(total.iter().all(|r| r.as_f64().is_some_and(|r| r > 0.0)), "{j}");
     assert!(by_round.len() > 1, "no pass's ratios: {j}");
+    // Two rounds can never be a result: the sign test's p-value is at least 0.5 (1 with a split).
+    assert!(j["total_sign_test_p"].as_f64().is_some_and(|p| (0.5..=1.0).contains(&p)), "{j}");
     assert!(j["a"]["total_ms"].as_f64().is_some_and(|t| t >= 0.0), "{j}");
     let j = run(same, edited);
     assert_eq!(j["scatter"]["same"], false, "{j}");

@@ -14,9 +14,10 @@
 //! (docs/results.md): rounds that alternate which side goes first put a drift on both sides alike,
 //! and the per-round totals show how large it was. Within a round the two sides run one after
 //! the other, seconds apart, so B over A in each round alone ([`AbResult::round_ratios`]) is the
-//! steadier reading: its range over the rounds, and in how many of them B was faster (a sign
-//! test: with two sides of the same speed, B is faster in all of 6 rounds once in 64 runs, in all
-//! of 4 once in 16).
+//! steadier reading: its range over the rounds, and in how many of them B was faster, with the
+//! sign test's two-sided p-value ([`RoundSummary::sign_test_p`]): with two sides of the same
+//! speed, B is faster in all of 6 rounds once in 64 runs, in all of 4 once in 16, and in 8 of 12
+//! (or more, either way) 39 times in 100. On a shared machine a run of 8 of 12 is not a result.
 
 use super::{style, time_frames, BenchError, Frames, Point, Timing};
 use crate::metrics::{self, ErrorStats};
@@ -118,6 +119,24 @@ impl RoundSummary {
             rounds: ratios.len(),
         })
     }
+
+    /// The sign test's two-sided p-value: the chance that two sides of the same speed split the
+    /// rounds (ties left out) at least this unevenly, either way. 1 with no untied round.
+    pub fn sign_test_p(&self) -> f64 {
+        let n = self.faster + self.slower;
+        let k = self.faster.max(self.slower);
+        // P(X >= k) for X ~ Binomial(n, 1/2), the binomial coefficients summed in f64 (exact
+        // for any number of rounds a person runs; C(n, i) / 2^n taken as a running product).
+        let mut term = 0.5f64.powi(n as i32); // C(n, 0) / 2^n
+        let mut tail = 0.0;
+        for i in 0..=n {
+            if i >= k {
+                tail += term;
+            }
+            term *= (n - i) as f64 / (i + 1) as f64;
+        }
+        (2.0 * tail).min(1.0)
+    }
 }
 
 fn ratios(pairs: impl Iterator<Item = (f64, f64)>) -> Vec<f64> {
@@ -187,6 +206,24 @@ mod tests {
 
     fn image(v: f32) -> Image {
         Image::from_pixels(2, 1, vec![[v, 1.0, 1.0], [1.0, 1.0, 1.0]]).unwrap()
+    }
+
+    #[test]
+    fn the_sign_test_is_the_binomial_tail_both_ways() {
+        let p = |faster: usize, slower: usize| {
+            RoundSummary { min: 0.9, max: 1.1, faster, slower, rounds: faster + slower }.sign_test_p()
+        };
+        assert!((p(4, 0) - 0.125).abs() < 1e-12);
+        assert!((p(0, 6) - 2.0 / 64.0).abs() < 1e-12);
+        // 2 (C(12,8) + C(12,9) + C(12,10) + C(12,11) + C(12,12)) / 2^12 = 2 * 794 / 4096.
+        assert!((p(8, 4) - 2.0 * 794.0 / 4096.0).abs() < 1e-12);
+        assert_eq!(p(6, 6), 1.0);
+        assert_eq!(p(0, 0), 1.0);
+        // Ties are left out: 3 faster, 0 slower of 5 rounds is 3 of 3.
+        let tied = RoundSummary { min: 0.9, max: 1.0, faster: 3, slower: 0, rounds: 5 };
+        assert!((tied.sign_test_p() - 0.25).abs() < 1e-12);
+        // A long run stays finite and exact enough: 100 of 100.
+        assert!((p(100, 0) - 2.0 * 0.5f64.powi(100)).abs() < 1e-40);
     }
 
     #[test]
