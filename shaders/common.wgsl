@@ -86,12 +86,16 @@ struct Frame {
 // it): read by shadow_lookup.wgsl's importers and by Cull's test of hidden triangles.
 struct ShadowFaces {
     view_proj: array<mat4x4f, 6>,
-    // x: texels per side, y: texel size (directional: scene units; point: per unit of distance),
-    // z: informational (the light type is the POINT_LIGHT override), w: the cube's near distance
-    // (point) or the orthographic depth range (directional).
+    // x: the budget's texels per side (the map holds about x^2 texels), y: texel size (directional:
+    // the longer side, scene units; point: per unit of distance), z: informational (the light type
+    // is the POINT_LIGHT override), w: the cube's near distance (point) or the orthographic depth
+    // range (directional).
     params: vec4f,
     // Directional: the reference point far on the light's side.
     origin: vec4f,
+    // Each layer's width and height in texels (a cube's faces are square; a sun's map is shaped to
+    // its rectangle, ShadowMap::dims), and their reciprocals.
+    size: vec4f,
 }
 
 fn is_point_light() -> bool { return POINT_LIGHT; }

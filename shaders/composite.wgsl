@@ -46,7 +46,7 @@ var<private> shadow: ShadowFaces;
 fn visibility(p: vec3f, bias: f32) -> f32 {
     let s = shadow_coords(p);
     if (!s.inside) { return 1.0; }
-    let uv = s.uv / shadow.params.x;
+    let uv = s.uv * shadow.size.zw;
     let d = s.value - bias;
     if (POINT_LIGHT) {
         let reference = select(3.0e38, s.per_depth / d, d > 0.0);

@@ -99,13 +99,14 @@ fn hidden_from_light(p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
     return hidden_in_pyramid(sun.matrix, sun.texels, f.work.z, p0, p1, p2);
 }
 
-// The pyramid's matrix and the map's texels per side, copied at the entry point like `f`: read in
+// The pyramid's matrix and the map's width and height, copied at the entry point like `f`: read in
 // the loop over triangles they were 17 loads per triangle, and inside a branch or loop llvmpipe
 // loads a storage value lane by lane even where its address is a constant (common.wgsl,
 // "Parameters"; the classroom's Cull 4.4 -> 3.6 ms, session 36).
 struct Sun {
     matrix: mat4x4f,
-    texels: f32,
+    // The map's width and height in texels.
+    texels: vec2f,
 }
 var<private> sun: Sun;
 
@@ -174,7 +175,7 @@ fn cull_one(tri: u32, t: Verts) -> Kept {
 @compute @workgroup_size(64)
 fn cull(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     f = frame_in;
-    if (!(POINT_LIGHT || GRID_SHADOWS)) { sun = Sun(pyramid_matrix(), shadow.params.x); }
+    if (!(POINT_LIGHT || GRID_SHADOWS)) { sun = Sun(pyramid_matrix(), shadow.size.xy); }
     // Meshes past the adapter's largest binding come in chunks: `tris` is this chunk's, and the
     // records hold indices into it.
     let count = arrayLength(&tris) / 3u;
@@ -241,7 +242,7 @@ const PER_THREAD: u32 = 16u; // LOCAL_THREADS x PER_THREAD = BLOCK
 @compute @workgroup_size(64)
 fn offsets_local(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
     f = frame_in;
-    if (!(POINT_LIGHT || GRID_SHADOWS)) { sun = Sun(pyramid_matrix(), shadow.params.x); }
+    if (!(POINT_LIGHT || GRID_SHADOWS)) { sun = Sun(pyramid_matrix(), shadow.size.xy); }
     if (lid == 0u) { block_count = (atomicLoad(&counters[0]) + BLOCK - 1u) / BLOCK; }
     // Dispatched for every triangle of the chunk: blocks past the kept ones have nothing to do.
     if (wg.x >= workgroupUniformLoad(&block_count)) { return; }

@@ -33,35 +33,36 @@ fn pyramid_column(i: u32) -> vec4f {
 // nothing), up to an occluder's gap narrower than a texel between texel centres, which the map
 // cannot see (docs/pruning.md); and at every texel centre it covers, the map holds a nearer depth
 // (drawn again, it would not change the map). Triangles reaching past the map's edge, or wider
-// than the coarsest level's blocks, are kept. `m`: the map's view-projection, `n` its texels per
-// side, `coarsest` the pyramid's coarsest level (0: no pyramid, nothing is hidden).
-fn hidden_in_pyramid(m: mat4x4f, n: f32, coarsest: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
+// than the coarsest level's blocks, are kept. `m`: the map's view-projection, `dims` its width and
+// height in texels, `coarsest` the pyramid's coarsest level (0: no pyramid, nothing is hidden).
+fn hidden_in_pyramid(m: mat4x4f, dims: vec2f, coarsest: u32, p0: vec3f, p1: vec3f, p2: vec3f) -> bool {
     if (coarsest == 0u) { return false; }
-    let c0 = map_point(m, n, p0);
-    let c1 = map_point(m, n, p1);
-    let c2 = map_point(m, n, p2);
+    let c0 = map_point(m, dims, p0);
+    let c1 = map_point(m, dims, p1);
+    let c2 = map_point(m, dims, p2);
     // A margin of a few float steps of depth 1 (the rasterizer's own depth at a texel centre may
     // round below the vertices' least), and a steep sliver's slope past its snapped edges.
     let margin = depth_margin(c0.xy, c1.xy, c2.xy, vec3f(c0.z, c1.z, c2.z), 4e-6);
     let lo = min(c0.xy, min(c1.xy, c2.xy));
     let hi = max(c0.xy, max(c1.xy, c2.xy));
-    return box_hidden(lo, hi, min(c0.z, min(c1.z, c2.z)) - margin, n, coarsest);
+    return box_hidden(lo, hi, min(c0.z, min(c1.z, c2.z)) - margin, dims, coarsest);
 }
 
 // Point p under the map's view-projection m: texel coordinates (xy, as shadow_lookup.wgsl's: texel
-// i spans [i, i + 1), for a map of n texels per side) and depth (z).
-fn map_point(m: mat4x4f, n: f32, p: vec3f) -> vec3f {
+// i spans [i, i + 1), for a map of dims texels) and depth (z).
+fn map_point(m: mat4x4f, dims: vec2f, p: vec3f) -> vec3f {
     let c = (m * vec4f(p, 1.0)).xyz;
-    return vec3f(vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * n, c.z);
+    return vec3f(vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * dims, c.z);
 }
 
 // Whether every texel the box [lo, hi] (texel coordinates) touches, and a ring of one around them,
-// holds a depth nearer than `nearest`; false for a box reaching past the map's edge (also NaN).
-fn box_hidden(lo: vec2f, hi: vec2f, nearest: f32, n: f32, coarsest: u32) -> bool {
+// holds a depth nearer than `nearest`; false for a box reaching past the map's edge (also NaN). The
+// pyramid of a `dims` map is one of the larger side's square (shadow_pyramid.wgsl).
+fn box_hidden(lo: vec2f, hi: vec2f, nearest: f32, dims: vec2f, coarsest: u32) -> bool {
     let a = floor(lo) - 1.0;
     let b = floor(hi) + 1.0;
-    if (!(all(a >= vec2f(0.0)) && all(b <= vec2f(n - 1.0)))) { return false; }
-    return pyramid_max(vec2u(a), vec2u(b), u32(n), coarsest) < nearest;
+    if (!(all(a >= vec2f(0.0)) && all(b <= dims - 1.0))) { return false; }
+    return pyramid_max(vec2u(a), vec2u(b), u32(max(dims.x, dims.y)), coarsest) < nearest;
 }
 
 // How far outside a triangle's edges the rasterizer may take a texel (or pixel) centre as covered:

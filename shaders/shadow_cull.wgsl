@@ -23,10 +23,12 @@ struct ShadowCull {
     // xyz: the light's position (point) or the direction toward it (sun).
     light: vec4f,
     // x: triangles, y: indices per region (the scene's index count), z: the pyramid's coarsest
-    // level (sun; 0: none), w: the sun map's texels per side.
+    // level (sun; 0: none), w: unused.
     counts: vec4u,
     // The sun map's view-projection.
     view_proj: mat4x4f,
+    // The sun map's width and height in texels; zw unused.
+    map_size: vec4u,
 }
 
 @group(0) @binding(0) var<storage, read> cull_in: ShadowCull;
@@ -114,7 +116,7 @@ fn sun(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups
     // centres, where a hidden triangle could show through a gap between them).
     let c = u.counts;
     let same = all(pm[0] == m[0]) && all(pm[1] == m[1]) && all(pm[2] == m[2]) && all(pm[3] == m[3]);
-    if (same && hidden_in_pyramid(m, f32(c.w), c.z, p0, p1, p2)) { return; }
+    if (same && hidden_in_pyramid(m, vec2f(u.map_size.xy), c.z, p0, p1, p2)) { return; }
     let at = atomicAdd(&args[0], 3u);
     lists[at] = indices[3u * t];
     lists[at + 1u] = indices[3u * t + 1u];

@@ -29,10 +29,11 @@
 struct Fit {
     // Codes of -a.x, -a.y, b.x, b.y (`code`); zero (below every float) before `reduce`.
     extremes: array<atomic<u32>, 4>,
-    // M_fit, the texel size (the coarser side, scene units) and the rectangle [a, b] in the
-    // casters' map coordinates (a.x, a.y, b.x, b.y).
+    // M_fit, the texel size (the coarser side, scene units), the rectangle's width over its height
+    // in scene units, and the rectangle [a, b] in the casters' map coordinates (a.x, a.y, b.x, b.y).
     view_proj: mat4x4f,
     texel: f32,
+    aspect: f32,
     rect: vec4f,
 }
 
@@ -125,9 +126,9 @@ fn finish() {
     }
     a = max(floor((a + 1.0) / STEP) * STEP - 1.0, vec2f(-1.0));
     b = min(max(ceil((b + 1.0) / STEP) * STEP - 1.0, a + STEP), vec2f(1.0));
-    // Half a texel of the new map beyond the extremes, as the casters' fit keeps.
-    let n = shadow.params.x;
-    let pad = (b - a) * (0.5 / n);
+    // Half a texel of the new map beyond the extremes, as the casters' fit keeps (size.zw: one over
+    // the map's width and height).
+    let pad = (b - a) * 0.5 * shadow.size.zw;
     a -= pad;
     b += pad;
     let s = 2.0 / (b - a);
@@ -137,6 +138,8 @@ fn finish() {
     // orthographic view-projection are scaled unit vectors).
     let span = 2.0 / vec2f(length(vec3f(m[0].x, m[1].x, m[2].x)), length(vec3f(m[0].y, m[1].y, m[2].y)));
     let side = span * (b - a) * 0.5;
-    fit.texel = max(side.x, side.y) / n;
+    fit.texel = max(side.x * shadow.size.z, side.y * shadow.size.w);
+    // Its shape, which the renderer gives the next frames' map (ShadowMap::dims): square texels.
+    fit.aspect = side.x / side.y;
     fit.rect = vec4f(a, b);
 }

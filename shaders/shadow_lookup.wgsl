@@ -66,15 +66,14 @@ fn shadow_coords(p: vec3f) -> ShadowCoords {
     if (clip.w <= 0.0) { return s; }
     let ndc = clip.xy / clip.w;
     if (any(abs(ndc) > vec2f(1.0))) { return s; }
-    s.uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow.params.x;
+    s.uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow.size.xy;
     s.inside = true;
     return s;
 }
 
 // The distance texel c (clamped into the map) stores along s's direction, in s.value's units.
 fn shadow_stored(s: ShadowCoords, c: vec2f) -> f32 {
-    let n = shadow.params.x;
-    let depth = textureLoad(shadow_map, vec2i(clamp(c, vec2f(0.0), vec2f(n - 1.0))), i32(s.layer), 0);
+    let depth = textureLoad(shadow_map, vec2i(clamp(c, vec2f(0.0), shadow.size.xy - 1.0)), i32(s.layer), 0);
     if (POINT_LIGHT) {
         return select(s.per_depth / depth, 3.0e38, depth <= 0.0);
     }

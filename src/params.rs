@@ -522,7 +522,7 @@ impl Baseline {
         unit: "texels",
         min: 64.0,
         max: 16384.0,
-        doc: "Texels per side of the shadow map (surface shadows, and the baseline's visibility).",
+        doc: "The shadow map's budget as texels per side of a square (surface shadows, and the baseline's visibility); VSV's sun map holds about as many texels, shaped to square texels over the rectangle it covers.",
     };
 
     pub fn validate(&self) -> Result<(), ParamError> {

@@ -93,6 +93,47 @@ fn a_sun_map_fitted_to_the_view_shadows_as_the_reference_does() {
     );
 }
 
+/// VSV's sun map is drawn with texels about square over the rectangle it is fitted to, from a
+/// view's first `render` on (which renders the frame again when its first fit asks for another
+/// shape), and holds about the budget's texels; its whole image is nearer the reference than with
+/// the budget's square, whose texels are as long as the rectangle is wide. The march keeps the
+/// square (its volume reads the map too: `ShadowMap::wanted_dims`).
+#[test]
+fn vsv_shapes_the_sun_map_to_its_rectangle_and_the_march_keeps_the_square() {
+    let Some(mut r) = renderer() else { return };
+    r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
+    // Looking along the walkway from low over it: the view segments' rectangle is long.
+    let mut scene = walkway();
+    scene.camera.eye = Vec3::new(-3.0, 1.6, 0.75);
+    scene.camera.target = Vec3::new(4.0, 0.0, 0.75);
+    let out = r.render(&scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let fit = r.read_shadow_fit().unwrap_or_else(|e| panic!("{e}")).unwrap_or_else(|| panic!("not fitted"));
+    let (w, h) = r.shadow_map_dims();
+    // The fitted map's extent along each axis: 2 / |row i of its orthographic view-projection|.
+    let m = fit.view_proj;
+    let extent = |i: usize| 2.0 / Vec3::new(m.x_axis[i], m.y_axis[i], m.z_axis[i]).length();
+    let (tx, ty) = (extent(0) / w as f32, extent(1) / h as f32);
+    assert!(fit.aspect.log2().abs() > 0.5, "the walkway's rectangle is near square ({}): nothing to shape", fit.aspect);
+    assert!((tx / ty).log2().abs() < 0.2, "{w} x {h} over {} x {} m: texels {tx} x {ty} m", extent(0), extent(1));
+    let budget = (w * h) as f64 / (512.0 * 512.0);
+    assert!((budget - 1.0).abs() < 0.05, "{w} x {h} against 512 x 512");
+    // The same frame with the square map (its texels as long as the rectangle is wide).
+    r.shape_shadow_map = false;
+    let square = r.render(&scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.shadow_map_dims(), (512, 512));
+    let exact = reference::render(&scene, W, H, &ReferenceOptions { progress: false, ..Default::default() });
+    let (shaped_err, square_err) = (rel_rmse(&out.hdr, &exact.hdr), rel_rmse(&square.hdr, &exact.hdr));
+    eprintln!(
+        "walkway, VSV's whole image: {:.2}% shaped ({w} x {h}), {:.2}% square",
+        100.0 * shaped_err,
+        100.0 * square_err
+    );
+    assert!(shaped_err < square_err, "shaped {:.3}% against square {:.3}%", 100.0 * shaped_err, 100.0 * square_err);
+    r.shape_shadow_map = true;
+    r.render(&scene, W, H, Method::Raymarch { steps: 64, jitter: false }).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.shadow_map_dims(), (512, 512), "the march's map");
+}
+
 /// A point light's cube map does not depend on the view: no fit runs, and a camera move keeps it.
 #[test]
 fn a_point_light_map_is_not_fitted() {

@@ -56,7 +56,7 @@ pub struct AbArgs {
 
 /// What the B side's renderer does differently from A's besides its shaders: the same choices as
 /// `--scan`, `--surface-shadows`, `--pixels` and `--eye-list` (which set both sides), for B alone, the
-/// Voxelize work list's runs and the shadow map's size. A change to the renderer's settings is
+/// Voxelize work list's runs, the shadow map's size and the sun map's shape. A change to the renderer's settings is
 /// then timed against the current ones in one process, like a shader edit (two binaries in
 /// alternating processes mislead on a shared machine: docs/results.md, session 35).
 #[derive(clap::Args)]
@@ -84,6 +84,10 @@ pub struct BSettings {
               &Baseline::SHADOW_MAP,
           ))]
     pub shadow_map: Option<u32>,
+    /// B draws VSV's sun map as the budget's square instead of shaped to its rectangle
+    /// (`Renderer::shape_shadow_map` off).
+    #[arg(id = "b_square_map", long = "b-square-map")]
+    pub square_map: bool,
 }
 
 impl BSettings {
@@ -101,6 +105,9 @@ impl BSettings {
         }
         if let Some(size) = self.shadow_map {
             renderer.set_shadow_map_size(size).context("--b-shadow-map")?;
+        }
+        if self.square_map {
+            renderer.shape_shadow_map = false;
         }
         Ok(())
     }
@@ -128,6 +135,9 @@ impl BSettings {
         }
         if let Some(size) = self.shadow_map {
             flags.push(format!("--b-shadow-map {size}"));
+        }
+        if self.square_map {
+            flags.push("--b-square-map".into());
         }
         flags
     }

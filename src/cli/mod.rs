@@ -245,7 +245,7 @@ pub struct RenderArgs {
     pub steps: Option<u32>,
     #[arg(long = "shadow-map", value_parser = parse_shadow_map,
           help = spec_default_help(
-              "Shadow-map texels per side (the surfaces' shadows, and the raymarch baseline's visibility)",
+              "Shadow-map texels per side of a square (the surfaces' shadows, and the raymarch baseline's visibility; VSV's sun map holds as many, shaped to its rectangle)",
               &Baseline::SHADOW_MAP,
               Baseline::default().shadow_map,
           ))]

@@ -410,6 +410,11 @@ pub struct Renderer {
     /// ([`ShadowFit`]; on by default, off only to compare, `tests/shadow_fit.rs`). The camera then
     /// joins the map's inputs: a camera move draws the sun's map again.
     pub fit_shadow_map: bool,
+    /// Directional lights, frames whose volume does not read the map (VSV's, the Cartesian
+    /// grid's): draw the map at a width and height that make its texels about square over the
+    /// rectangle it covers, for about as many texels as the budget's square
+    /// ([`ShadowMap::wanted_dims`]). On by default; off only to compare.
+    pub shape_shadow_map: bool,
     /// VSV frames take the surfaces' shadows from the shadow volume instead of a shadow map
     /// (Integrate reads them from the same bits: `integrate.wgsl`, "surface shadows"), and draw no
     /// shadow map at all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The
@@ -438,6 +443,10 @@ pub struct Renderer {
     pub prune_plane_rays: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
+    /// The fitted rectangle's aspect, from a frame's fit to the next frames' map
+    /// ([`ShadowMap::dims`]), and the last one read (`None` before any: the casters' rectangle's).
+    fit_readback: shadow_fit::AspectReadback,
+    fit_aspect: Option<f32>,
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
@@ -504,6 +513,7 @@ impl Renderer {
         let shadow_uniforms =
             uniform("Renderer::shadow_uniforms", std::mem::size_of::<ShadowUniforms>(), wgpu::BufferUsages::COPY_SRC);
         let timer = GpuTimer::new(&ctx);
+        let fit_readback = shadow_fit::AspectReadback::new(&ctx.device);
         let scan_columns = ctx.info.device_type != wgpu::DeviceType::Cpu;
         Ok(Renderer {
             ctx,
@@ -517,10 +527,13 @@ impl Renderer {
             hidden_blocks: true,
             eye_occlusion_culling: true,
             fit_shadow_map: true,
+            shape_shadow_map: true,
             grid_shadows: false,
             adaptive_pixels: true,
             prune_plane_rays: true,
             last_fitted: false,
+            fit_readback,
+            fit_aspect: None,
             pyramid_to_build: None,
             eye_pyramid_to_build: None,
             reuse_unchanged: true,
@@ -576,9 +589,14 @@ impl Renderer {
         self.adaptive_pixels && self.passes.integrate.adaptive_available()
     }
 
-    /// Texels per side of each shadow-map layer.
+    /// The shadow map's budget: texels per side of a square ([`ShadowMap::size`]).
     pub fn shadow_map_size(&self) -> u32 {
         self.passes.shadow_map.size
+    }
+
+    /// Each shadow-map layer's width and height as the last frame drew it ([`ShadowMap::dims`]).
+    pub fn shadow_map_dims(&self) -> (u32, u32) {
+        self.passes.shadow_map.dims
     }
 
     /// Rebuilds the shadow map at `size` texels per side (the ray-marching baseline's quality knob;
@@ -775,7 +793,7 @@ impl Renderer {
         use wgpu::BindingResource as R;
         let frame = || self.frame_buffer.as_entire_binding();
         let shadow = || self.shadow_uniforms.as_entire_binding();
-        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, (p.shadow_map.size, p.shadow_map.size));
+        p.shadow_pyramid.bind(d, &p.shadow_map.map_view, p.shadow_map.dims);
         let Some(pyramid) = &p.shadow_pyramid.pyramid else { return };
         p.shadow_map.bind(d, &geometry.gpu, pyramid);
         let shadow_map = R::TextureView(&p.shadow_map.map_view);
@@ -846,6 +864,18 @@ impl Renderer {
         }
         let mut setup = FrameSetup::with_pruning(scene, width, height, method, self.prune)?;
         self.set_frame_flags(scene, &mut setup);
+        // The map's texels square over the rectangle it covers: the last fit's (a view moves by
+        // small steps), else the casters' (ShadowMap::dims).
+        if let Some(aspect) = self.fit_readback.take(&self.ctx.device) {
+            self.fit_aspect = Some(aspect);
+        }
+        let max_side = self.ctx.device.limits().max_texture_dimension_2d;
+        let aspect = self.fit_aspect.filter(|_| self.fits_map(&setup));
+        let shaped = self.shapes_map(method);
+        let dims = self.passes.shadow_map.wanted_dims(scene, shaped, aspect, max_side);
+        if self.passes.shadow_map.set_dims(&self.ctx.device, dims) {
+            self.stale_bindings = true;
+        }
         let variant = setup.variant(&scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
@@ -1071,6 +1101,7 @@ impl Renderer {
             if draws_map && !map_reused {
                 if fitted {
                     p.shadow_fit.record(&mut f.enc, v, &self.shadow_uniforms, width, height);
+                    self.fit_readback.record(&mut f.enc, &p.shadow_fit);
                     f.mark(Pass::ShadowFit);
                 }
                 p.shadow_map.record(queue, &mut f.enc, v, scene, g, drawing);
@@ -1168,6 +1199,7 @@ impl Renderer {
             t.resolve(&mut enc);
         }
         self.ctx.queue.submit([enc.finish()]);
+        self.fit_readback.submitted();
         self.ctx.take_uncaptured("rendering the frame")?;
         let mut timings: Vec<PassTiming> = Vec::new();
         for (pass, ms) in timer.map(|t| t.read(&self.ctx)).transpose()?.unwrap_or_default() {
@@ -1183,7 +1215,10 @@ impl Renderer {
         Ok(FrameInfo { timings, setup, passes, reused, variant, adaptive_pixels })
     }
 
-    /// Renders one frame and reads the final and the scattered image back to the CPU.
+    /// Renders one frame and reads the final and the scattered image back to the CPU. A view's
+    /// first frame under a sun draws its map shaped to the casters' rectangle, not yet to the
+    /// rectangle it fits ([`ShadowMap::dims`]): when that frame's fit asks for another shape, the
+    /// frame is rendered again with it, so that a one-off image has the map a second frame would.
     pub fn render(
         &mut self,
         scene: &Scene,
@@ -1191,8 +1226,35 @@ impl Renderer {
         height: u32,
         method: Method,
     ) -> Result<RenderOutput, RenderError> {
-        let info = self.render_frame(scene, width, height, method)?;
+        let mut info = self.render_frame(scene, width, height, method)?;
+        if self.map_reshapes(scene, method) {
+            info = self.render_frame(scene, width, height, method)?;
+        }
         self.read_output(info)
+    }
+
+    /// Whether the last frame's fit (read back now, waiting for it) gives `scene`'s next frame a
+    /// map of another shape.
+    fn map_reshapes(&mut self, scene: &Scene, method: Method) -> bool {
+        if !self.last_fitted {
+            return false;
+        }
+        if self.fit_readback.in_flight() {
+            // The frame's own timestamps were read with a wait; without them, wait here.
+            let _ = self.ctx.wait();
+        }
+        if let Some(aspect) = self.fit_readback.take(&self.ctx.device) {
+            self.fit_aspect = Some(aspect);
+        }
+        let max_side = self.ctx.device.limits().max_texture_dimension_2d;
+        let shaped = self.shapes_map(method);
+        self.passes.shadow_map.wanted_dims(scene, shaped, self.fit_aspect, max_side) != self.passes.shadow_map.dims
+    }
+
+    /// Whether `method`'s frames shape a sun's map to its rectangle ([`ShadowMap::wanted_dims`]):
+    /// those whose volume does not read the map.
+    fn shapes_map(&self, method: Method) -> bool {
+        self.shape_shadow_map && !matches!(method, Method::Raymarch { .. })
     }
 
     /// Reads back the final and the scattered image that the frame `info` (the last one
@@ -1377,7 +1439,12 @@ mod layout_tests {
 
     #[test]
     fn shadow_uniforms_match_wgsl() {
-        check("shadow_fit.wgsl", "Fit", fields!(FitResult: extremes, view_proj, texel, rect), size_of::<FitResult>());
+        check(
+            "shadow_fit.wgsl",
+            "Fit",
+            fields!(FitResult: extremes, view_proj, texel, aspect, rect),
+            size_of::<FitResult>(),
+        );
         check("shadow_map.wgsl", "Face", fields!(FaceUniforms: view_proj, light, origin), size_of::<FaceUniforms>());
         check(
             "shadow_pyramid.wgsl",
@@ -1388,13 +1455,13 @@ mod layout_tests {
         check(
             "shadow_cull.wgsl",
             "ShadowCull",
-            fields!(ShadowCullUniforms: light, counts, view_proj),
+            fields!(ShadowCullUniforms: light, counts, view_proj, map_size),
             size_of::<ShadowCullUniforms>(),
         );
         check(
             "composite.wgsl",
             "ShadowFaces",
-            fields!(ShadowUniforms: view_proj, params, origin),
+            fields!(ShadowUniforms: view_proj, params, origin, size),
             size_of::<ShadowUniforms>(),
         );
     }

@@ -12,6 +12,10 @@
 //! the new texel size into the map's face uniforms, its draw list's parameters and the lookups'
 //! `ShadowFaces` before the map is drawn: no CPU round trip, and every method (VSV's surfaces,
 //! the march's volume) gets the finer map.
+//!
+//! The rectangle's shape (width over height in scene units) goes the other way, to the CPU, for
+//! the next frames' map ([`AspectReadback`], read without waiting): the map is drawn at a width
+//! and height that make its texels about square over it ([`super::ShadowMap::dims`]).
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -34,7 +38,9 @@ pub struct FitResult {
     pub view_proj: Mat4,
     /// Its texel size, the coarser side, in scene units.
     pub texel: f32,
-    pub _pad: [f32; 3],
+    /// The rectangle's width over its height, in scene units.
+    pub aspect: f32,
+    pub _pad: [f32; 2],
     /// The fitted rectangle `(a.x, a.y, b.x, b.y)` in the casters' map coordinates (`[-1, 1]`).
     pub rect: Vec4,
 }
@@ -130,6 +136,96 @@ impl ShadowFit {
     /// list's parameters).
     pub fn copy_matrix(&self, encoder: &mut wgpu::CommandEncoder, buffer: &wgpu::Buffer, offset: u64) {
         encoder.copy_buffer_to_buffer(&self.result, Self::VIEW_PROJ, buffer, offset, 64);
+    }
+}
+
+/// The fitted rectangle's aspect ([`FitResult::aspect`]) carried back to the CPU without a wait:
+/// [`AspectReadback::record`] copies it out of a frame's fit, [`AspectReadback::submitted`] asks
+/// for the copy to be mapped once that frame is on the queue, and [`AspectReadback::take`] returns
+/// it when the mapping is done (a frame's timestamps are read with a wait, so by the next frame it
+/// is; without them a later frame's `take` finds it). One copy in flight at a time: a frame that
+/// finds the last one still mapping records none.
+pub struct AspectReadback {
+    /// [`FitResult::texel`] and [`FitResult::aspect`].
+    staging: wgpu::Buffer,
+    state: std::sync::Arc<std::sync::atomic::AtomicU8>,
+}
+
+impl AspectReadback {
+    const IDLE: u8 = 0;
+    const COPIED: u8 = 1;
+    const MAPPING: u8 = 2;
+    const MAPPED: u8 = 3;
+    const FAILED: u8 = 4;
+    const FROM: u64 = std::mem::offset_of!(FitResult, texel) as u64;
+
+    pub fn new(device: &wgpu::Device) -> AspectReadback {
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("AspectReadback::staging"),
+            size: 8,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        AspectReadback { staging, state: Default::default() }
+    }
+
+    fn state(&self) -> u8 {
+        self.state.load(std::sync::atomic::Ordering::Acquire)
+    }
+
+    fn set(&self, s: u8) {
+        self.state.store(s, std::sync::atomic::Ordering::Release);
+    }
+
+    /// Copies `fit`'s result out, after its pass in `encoder`, unless a copy is in flight.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, fit: &ShadowFit) {
+        if self.state() == Self::IDLE {
+            encoder.copy_buffer_to_buffer(&fit.result, Self::FROM, &self.staging, 0, 8);
+            self.set(Self::COPIED);
+        }
+    }
+
+    /// The frame that recorded the copy was submitted (or dropped: the staging then holds an
+    /// older value or zeros, which [`AspectReadback::take`] passes over).
+    pub fn submitted(&self) {
+        if self.state() != Self::COPIED {
+            return;
+        }
+        self.set(Self::MAPPING);
+        let state = self.state.clone();
+        self.staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            state.store(if r.is_ok() { Self::MAPPED } else { Self::FAILED }, std::sync::atomic::Ordering::Release);
+        });
+    }
+
+    /// Whether a copy was asked to be mapped and has not been taken.
+    pub fn in_flight(&self) -> bool {
+        matches!(self.state(), Self::MAPPING | Self::MAPPED)
+    }
+
+    /// The aspect of the last fit copied, once its mapping is done (a positive finite value);
+    /// `None` while it is in flight or when there is none.
+    pub fn take(&self, device: &wgpu::Device) -> Option<f32> {
+        if self.state() == Self::MAPPING {
+            // Runs the callbacks of finished mappings; does not wait.
+            let _ = device.poll(wgpu::PollType::Poll);
+        }
+        match self.state() {
+            Self::MAPPED => {
+                let aspect = match self.staging.slice(..).get_mapped_range() {
+                    Ok(data) => f32::from_le_bytes([data[4], data[5], data[6], data[7]]),
+                    Err(_) => f32::NAN,
+                };
+                self.staging.unmap();
+                self.set(Self::IDLE);
+                Some(aspect).filter(|a| a.is_finite() && *a > 0.0)
+            }
+            Self::FAILED => {
+                self.set(Self::IDLE);
+                None
+            }
+            _ => None,
+        }
     }
 }
 

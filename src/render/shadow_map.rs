@@ -20,6 +20,11 @@
 //! The sun's map draws a list the same way (`sun` in shadow_cull.wgsl): the solids' faces toward
 //! the light, less the triangles an earlier frame's pyramid of the same map shows hidden, which
 //! could not win its depth test ([`super::ShadowPyramid`]; the same map, bit for bit).
+//!
+//! Size: `size` is a budget, texels per side of a square. A cube's faces are that square; a sun's
+//! map for a frame whose volume does not read it (VSV's) holds about `size²` texels shaped so
+//! that they are square over the rectangle it covers ([`ShadowMap::dims`], [`sun_dims`]; the
+//! rectangle's aspect comes from the last frame's fit, [`super::shadow_fit::AspectReadback`]).
 
 use super::scene_gpu::{Facing, SceneGpu};
 use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, texture_2d, toward_is_ccw, Kind};
@@ -55,10 +60,12 @@ pub struct ShadowCullUniforms {
     /// xyz: the light's position (point) or the direction toward it (sun).
     pub light: Vec4,
     /// x: triangles, y: indices per face region (the scene's index count), z: the pyramid's
-    /// coarsest level the sun list may read (0: none), w: the sun map's texels per side.
+    /// coarsest level the sun list may read (0: none), w: unused.
     pub counts: [u32; 4],
     /// The sun map's view-projection.
     pub view_proj: Mat4,
+    /// The sun map's width and height in texels ([`ShadowMap::dims`]); zw unused.
+    pub map_size: [u32; 4],
 }
 
 /// What face culling holds for one scene's geometry.
@@ -110,11 +117,14 @@ pub struct FaceUniforms {
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct ShadowUniforms {
     pub view_proj: [Mat4; 6],
-    /// x: texels per side, y: texel size (directional: scene units; point: per unit distance),
-    /// z: 1 point / 0 directional (informational: shaders take the light type from `Variant`),
-    /// w: the cube's near distance (point) or the orthographic depth range (directional).
+    /// x: the budget's texels per side ([`ShadowMap::size`]), y: texel size (directional: the
+    /// longer side, scene units; point: per unit distance), z: 1 point / 0 directional
+    /// (informational: shaders take the light type from `Variant`), w: the cube's near distance
+    /// (point) or the orthographic depth range (directional).
     pub params: Vec4,
     pub origin: Vec4,
+    /// Each layer's width and height in texels ([`ShadowMap::dims`]) and their reciprocals.
+    pub size: Vec4,
 }
 
 pub struct ShadowMap {
@@ -122,12 +132,23 @@ pub struct ShadowMap {
     pipeline_layout: wgpu::PipelineLayout,
     /// Per variant, one pipeline per cull mode ([`super::util::facing_pipelines`]).
     pipelines: VariantPipelines<Vec<wgpu::RenderPipeline>>,
+    /// The budget, as texels per side of a square (`--shadow-map`, the editor's size): a cube
+    /// face is that square, a sun's map holds about its square's texels ([`ShadowMap::dims`]).
     pub size: u32,
-    /// [`ShadowMap::FORMAT`], six layers.
+    /// Each layer's width and height in texels: `size` square for a point light's cube; for a
+    /// sun, shaped to the rectangle the map covers so that its texels are about square
+    /// ([`sun_dims`]). Texels 2.4 times longer one way than the other (the square map over the
+    /// classroom's 13.6 x 5.7 m) waste the budget along the short side and size the surfaces'
+    /// slope bias to the long one: shaped, the classroom's whole image is ~15% closer to the
+    /// reference for the same texels (docs/results.md, session 41).
+    pub dims: (u32, u32),
+    /// [`ShadowMap::FORMAT`], six layers of `dims`.
     pub map: wgpu::Texture,
     pub map_view: wgpu::TextureView,
-    /// Per face: its uniforms, their bind group and the map layer it renders into.
-    faces: Vec<(wgpu::Buffer, wgpu::BindGroup, wgpu::TextureView)>,
+    /// Per face: its uniforms and their bind group.
+    faces: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Per face: the map layer it renders into.
+    face_views: Vec<wgpu::TextureView>,
     cull_layout: wgpu::BindGroupLayout,
     cull_pipeline: wgpu::ComputePipeline,
     /// The sun's list (`sun` in shadow_cull.wgsl).
@@ -149,20 +170,7 @@ impl ShadowMap {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let map = texture_2d(
-            device,
-            "ShadowMap::map",
-            size,
-            size,
-            6,
-            Self::FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
-        let map_view = map.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("ShadowMap::map_view"),
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let (map, map_view, face_views) = Self::texture(device, (size, size));
         let faces = (0..6)
             .map(|i| {
                 let buf = device.create_buffer(&wgpu::BufferDescriptor {
@@ -176,14 +184,7 @@ impl ShadowMap {
                     &format!("ShadowMap::face{i}_bind_group"),
                     &layout,
                 );
-                let view = map.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some(&format!("ShadowMap::face{i}_view")),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                });
-                (buf, bg, view)
+                (buf, bg)
             })
             .collect();
         let cull_module = lib.module(device, "shadow_cull.wgsl")?;
@@ -201,15 +202,85 @@ impl ShadowMap {
             pipeline_layout: pl,
             pipelines: VariantPipelines::new(Specialised::Light),
             size,
+            dims: (size, size),
             map,
             map_view,
             faces,
+            face_views,
             cull_layout,
             cull_pipeline,
             sun_pipeline,
             cull_uniforms,
             face_lists: None,
         })
+    }
+
+    /// The map's texture of six `dims` layers, its array view (the lookups') and one view per layer
+    /// (the faces' render targets).
+    fn texture(device: &wgpu::Device, dims: (u32, u32)) -> (wgpu::Texture, wgpu::TextureView, Vec<wgpu::TextureView>) {
+        let map = texture_2d(
+            device,
+            "ShadowMap::map",
+            dims.0,
+            dims.1,
+            6,
+            Self::FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let map_view = map.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("ShadowMap::map_view"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let face_views = (0..6)
+            .map(|i| {
+                map.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(&format!("ShadowMap::face{i}_view")),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: i,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        (map, map_view, face_views)
+    }
+
+    /// Remakes the texture at `dims` unless it has them; true when it did (the lookups' and the
+    /// pyramid's bind groups then need the new view).
+    pub fn set_dims(&mut self, device: &wgpu::Device, dims: (u32, u32)) -> bool {
+        if dims == self.dims {
+            return false;
+        }
+        (self.map, self.map_view, self.face_views) = Self::texture(device, dims);
+        self.dims = dims;
+        true
+    }
+
+    /// The layers' width and height a frame under `scene`'s light wants: the budget's square for
+    /// a point light and for a map that is not `shaped`; else, for a sun, [`sun_dims`] for the
+    /// rectangle's `aspect` (width over height in scene units; `None`: the casters' rectangle,
+    /// [`ShadowMap::uniforms`]'s unfitted one), no side past `max_side`.
+    ///
+    /// Only maps that serve the surfaces alone are shaped (VSV's, whose volume is the grid's):
+    /// the march also samples its volume in the map, and there the shape trades the other way.
+    /// On the classroom square texels took the 1024-step march on the 4096 map from 0.764% to
+    /// 0.89% off the reference's scattered light (its shaft's long upper edge runs across the
+    /// map's short side, which the square map resolves 1.5 times finer; docs/results.md,
+    /// session 41), so the march keeps the square.
+    pub fn wanted_dims(&self, scene: &Scene, shaped: bool, aspect: Option<f32>, max_side: u32) -> (u32, u32) {
+        let Light::Directional { direction, .. } = scene.light else { return (self.size, self.size) };
+        if !shaped {
+            return (self.size, self.size);
+        }
+        let aspect = aspect.unwrap_or_else(|| {
+            // (Margins of a huge map's half texel: none to speak of.)
+            let (lo, hi) =
+                light_rectangle(&scene.core_bounds(), Self::sun_view(scene, direction).0, (u32::MAX, u32::MAX));
+            let d = hi - lo;
+            d.x / d.y
+        });
+        sun_dims(self.size, aspect, self.dims, max_side)
     }
 
     /// Whether the faces can be culled for the bound geometry (the lists fit a storage binding).
@@ -353,7 +424,7 @@ impl ShadowMap {
                     faces[i] = FaceUniforms { view_proj: proj * view, light: l.extend(1.0), origin: Vec4::ZERO };
                 }
                 // A 90-degree face: a texel spans 2 / size per unit of distance from the light.
-                texel = 2.0 / self.size as f32;
+                texel = 2.0 / self.dims.0 as f32;
                 count = 6;
             }
             Light::Directional { direction, .. } => {
@@ -361,28 +432,38 @@ impl ShadowMap {
                 // box's corners in light space: texel density where the casters are, a square
                 // around its bounding sphere wasted up to 3.5x in one axis on the classroom);
                 // along it, the whole scene (every caster on the light's side counts).
-                let core = scene.core_bounds();
-                let cc = core.center();
-                let w = direction.normalize_or(Vec3::Y);
-                let origin = cc + w * ((c - cc).dot(w) + 2.0 * r);
-                let up = if w.y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
-                let view = glam::camera::rh::view::look_to_mat4(origin, -w, up);
+                let (view, origin, w) = Self::sun_view(scene, direction);
                 let depth = (origin - c).dot(w) + 2.0 * r;
                 near_or_range = depth;
-                let (lo, hi) = light_rectangle(&core, view, self.size);
+                let (lo, hi) = light_rectangle(&scene.core_bounds(), view, self.dims);
                 let proj = glam::camera::rh::proj::directx::orthographic(lo.x, hi.x, lo.y, hi.y, 0.0, depth);
                 faces[0] = FaceUniforms { view_proj: proj * view, light: w.extend(0.0), origin: origin.extend(1.0) };
                 // The bias works in the coarser of the two texel sides.
-                texel = (hi - lo).max_element() / self.size as f32;
+                texel = ((hi - lo) / glam::Vec2::new(self.dims.0 as f32, self.dims.1 as f32)).max_element();
                 count = 1;
             }
         }
+        let (width, height) = (self.dims.0 as f32, self.dims.1 as f32);
         let lookup = ShadowUniforms {
             view_proj: faces.map(|f| f.view_proj),
             params: Vec4::new(self.size as f32, texel, if count == 6 { 1.0 } else { 0.0 }, near_or_range),
             origin: faces[0].origin,
+            size: Vec4::new(width, height, 1.0 / width, 1.0 / height),
         };
         (faces, lookup, count)
+    }
+
+    /// A sun's light view: from a point far on the light's side of the scene's core (its box
+    /// without backdrops), looking along the light; and that point and the unit direction toward
+    /// the light.
+    fn sun_view(scene: &Scene, direction: Vec3) -> (Mat4, Vec3, Vec3) {
+        let b = scene.bounds();
+        let (c, r) = (b.center(), b.radius().max(1e-6));
+        let cc = scene.core_bounds().center();
+        let w = direction.normalize_or(Vec3::Y);
+        let origin = cc + w * ((c - cc).dot(w) + 2.0 * r);
+        let up = if w.y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
+        (glam::camera::rh::view::look_to_mat4(origin, -w, up), origin, w)
     }
 
     pub fn record(
@@ -405,8 +486,9 @@ impl ShadowMap {
                 };
                 let u = ShadowCullUniforms {
                     light,
-                    counts: [fl.triangles, fl.index_count, drawing.hidden, self.size],
+                    counts: [fl.triangles, fl.index_count, drawing.hidden, 0],
                     view_proj: faces[0].view_proj,
+                    map_size: [self.dims.0, self.dims.1, 0, 0],
                 };
                 queue.write_buffer(&self.cull_uniforms, 0, bytemuck::bytes_of(&u));
                 if let Some(fit) = drawing.fit {
@@ -435,7 +517,8 @@ impl ShadowMap {
         // it, mesh runs at a time (the face lists already left the others out).
         let runs = if culled.is_none() { geometry.draw_runs(drawing.light_facing) } else { Vec::new() };
         for (i, face) in faces.iter().enumerate() {
-            let (uniforms, bind_group, view) = &self.faces[i];
+            let (uniforms, bind_group) = &self.faces[i];
+            let view = &self.face_views[i];
             queue.write_buffer(uniforms, 0, bytemuck::bytes_of(face));
             // A directional map fitted to the view (one face): ShadowFit's matrix replaces the
             // casters' fit (the queue's write lands before the frame's commands).
@@ -482,15 +565,33 @@ impl ShadowMap {
 
 /// The rectangle of the directional map in light view space: the box's eight corners under
 /// `view`, with half a texel of margin and never a zero-width side (a flat scene seen edge-on).
-fn light_rectangle(core: &crate::scene::Aabb, view: Mat4, size: u32) -> (glam::Vec2, glam::Vec2) {
+fn light_rectangle(core: &crate::scene::Aabb, view: Mat4, dims: (u32, u32)) -> (glam::Vec2, glam::Vec2) {
     let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
     for corner in core.corners() {
         let p = view.transform_point3(corner).truncate();
         lo = lo.min(p);
         hi = hi.max(p);
     }
-    let pad = ((hi - lo) * (0.5 / size as f32)).max(glam::Vec2::splat(1e-6));
+    let pad = ((hi - lo) * 0.5 / glam::Vec2::new(dims.0 as f32, dims.1 as f32)).max(glam::Vec2::splat(1e-6));
     (lo - pad, hi + pad)
+}
+
+/// The width and height of a sun's map of about `size²` texels whose texels are square over a
+/// rectangle `aspect` times as wide as high (scene units). The aspect goes in steps of 2^(1/4)
+/// within [1/4, 4] (texels at most 2^(1/8) from square), and `current`'s step stays while the
+/// aspect lies within 3/4 of a step of it, so that a moving view seldom remakes the texture;
+/// sides are multiples of size / 32 (64 texels, llvmpipe's tile, from a 2048 budget on) and at
+/// most `max_side`. A non-finite or non-positive aspect keeps `current`'s step.
+pub fn sun_dims(size: u32, aspect: f32, current: (u32, u32), max_side: u32) -> (u32, u32) {
+    const STEPS: f32 = 4.0;
+    let step = |w: u32, h: u32| (STEPS * (w as f32 / h.max(1) as f32).log2()).round().clamp(-8.0, 8.0);
+    let at = step(current.0, current.1);
+    let want = if aspect.is_finite() && aspect > 0.0 { (STEPS * aspect.log2()).clamp(-8.0, 8.0) } else { at };
+    let k = if (want - at).abs() <= 0.75 { at } else { want.round() };
+    let r = 2f32.powf(k / (2.0 * STEPS));
+    let grain = (size / 32).clamp(1, 64);
+    let side = |x: f32| (((x / grain as f32).round() as u32).max(1) * grain).min(max_side.max(1));
+    (side(size as f32 * r), side(size as f32 / r))
 }
 
 #[cfg(test)]
@@ -507,7 +608,7 @@ mod tests {
         let w = Vec3::new(-0.866, 0.417, -0.277).normalize();
         let view = glam::camera::rh::view::look_to_mat4(core.center() + w * 100.0, -w, Vec3::Y);
         let size = 2048;
-        let (lo, hi) = light_rectangle(&core, view, size);
+        let (lo, hi) = light_rectangle(&core, view, (size, size));
         let texel = (hi - lo) / size as f32;
         let (mut seen_lo, mut seen_hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
         for c in core.corners() {
@@ -520,5 +621,36 @@ mod tests {
         let diameter = 2.0 * core.radius();
         let (wide, narrow) = ((hi - lo).max_element(), (hi - lo).min_element());
         assert!(wide <= diameter * 1.01 && narrow < diameter / 3.0, "{wide} x {narrow} against {diameter}");
+    }
+
+    /// A sun's map holds about its budget's texels, with texels within 2^(1/8) of square (and
+    /// the sides' rounding to 64 texels) over the rectangle; it keeps its step while the aspect
+    /// wavers within 3/4 of a step, stops at 4:1 and at the adapter's side, and keeps its shape
+    /// for an aspect that is no number.
+    #[test]
+    fn a_sun_map_is_shaped_to_its_rectangle() {
+        let square = (2048, 2048);
+        for aspect in [1.0f32, 1.3, 2.39, 3.4, 0.42, 4.0, 0.25] {
+            let (w, h) = sun_dims(2048, aspect, square, 16384);
+            assert!(w % 64 == 0 && h % 64 == 0, "{aspect}: {w} x {h}");
+            // A texel's width over its height: (aspect / w) / (1 / h).
+            let texel = aspect * h as f32 / w as f32;
+            assert!(texel.log2().abs() <= 0.125 + 0.03, "{aspect}: {w} x {h}, texels {texel}:1");
+            let count = w as f64 * h as f64 / (2048.0 * 2048.0);
+            assert!((count - 1.0).abs() < 0.03, "{aspect}: {w} x {h} holds {count} of the budget");
+        }
+        assert_eq!(sun_dims(2048, 50.0, square, 16384), (4096, 1024));
+        assert_eq!(sun_dims(2048, 0.01, square, 16384), (1024, 4096));
+        let classroom = sun_dims(2048, 2.39, square, 16384);
+        assert_eq!(classroom, (3136, 1344));
+        assert_eq!(sun_dims(2048, 2.39 * 2f32.powf(0.15), classroom, 16384), classroom);
+        assert_eq!(sun_dims(2048, 2.39 / 2f32.powf(0.15), classroom, 16384), classroom);
+        assert_ne!(sun_dims(2048, 2.39 * 2f32.powf(0.25), classroom, 16384), classroom);
+        assert_eq!(sun_dims(2048, f32::NAN, classroom, 16384), classroom);
+        assert_eq!(sun_dims(2048, -1.0, classroom, 16384), classroom);
+        assert_eq!(sun_dims(8192, 4.0, (8192, 8192), 8192), (8192, 4096));
+        // A small budget rounds to a finer grain.
+        let (w, h) = sun_dims(64, 2.39, (64, 64), 16384);
+        assert!((w * h) as f64 / 4096.0 > 0.9 && w > h, "{w} x {h}");
     }
 }
