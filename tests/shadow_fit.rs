@@ -102,10 +102,7 @@ fn a_sun_map_fitted_to_the_view_shadows_as_the_reference_does() {
 fn vsv_shapes_the_sun_map_to_its_rectangle_and_the_march_keeps_the_square() {
     let Some(mut r) = renderer() else { return };
     r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
-    // Looking along the walkway from low over it: the view segments' rectangle is long.
-    let mut scene = walkway();
-    scene.camera.eye = Vec3::new(-3.0, 1.6, 0.75);
-    scene.camera.target = Vec3::new(4.0, 0.0, 0.75);
+    let scene = walkway_lengthwise();
     let out = r.render(&scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
     let fit = r.read_shadow_fit().unwrap_or_else(|e| panic!("{e}")).unwrap_or_else(|| panic!("not fitted"));
     let (w, h) = r.shadow_map_dims();
@@ -132,6 +129,45 @@ fn vsv_shapes_the_sun_map_to_its_rectangle_and_the_march_keeps_the_square() {
     r.shape_shadow_map = true;
     r.render(&scene, W, H, Method::Raymarch { steps: 64, jitter: false }).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.shadow_map_dims(), (512, 512), "the march's map");
+}
+
+/// The walkway seen along its length from low over it: the view segments' rectangle is long, and
+/// its aspect lies steps away from the casters' 40 m rectangle's.
+fn walkway_lengthwise() -> Scene {
+    let mut scene = walkway();
+    scene.camera.eye = Vec3::new(-3.0, 1.6, 0.75);
+    scene.camera.target = Vec3::new(4.0, 0.0, 0.75);
+    scene
+}
+
+/// After a camera move whose view segments' rectangle has another shape, the frame after the
+/// move's first (with nothing changed) remakes the map in the shape the move's fit asked for,
+/// which `would_reuse` foresees (the editor then renders a preview first, not a frame it expects
+/// to be quick); the frame after that takes everything before the volume over.
+#[test]
+fn the_frame_after_a_move_reshapes_the_map_and_would_reuse_foresees_it() {
+    let Some(mut r) = renderer() else { return };
+    r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
+    let frame =
+        |r: &mut Renderer, scene: &Scene| r.render_frame(scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    // A still view settles by its fourth frame: the first draws the casters' shape, the second
+    // the fit's, the third reads a pyramid of that map, the fourth takes it all over.
+    let above = walkway();
+    let settled_at = (1..=4).find(|_| frame(&mut r, &above).reused_all_before_volume());
+    assert_eq!(settled_at, Some(4), "a still view's frames");
+    let settled = r.shadow_map_dims();
+    let along = walkway_lengthwise();
+    frame(&mut r, &along);
+    assert_eq!(r.shadow_map_dims(), settled, "the move's first frame has the last fit's shape");
+    assert!(!r.would_reuse(&along, W, H, Method::Vsv), "a map to reshape foreseen as reused");
+    let reshaped = frame(&mut r, &along);
+    assert_ne!(r.shadow_map_dims(), settled, "the map kept the view above's shape");
+    assert!(reshaped.passes.contains(&Pass::ShadowMap), "ran {:?}", reshaped.passes);
+    // The reshaped map's pyramid (made at that frame's end) serves the next frame, which reads it
+    // (not yet foreseen as reused: its hidden-triangle test changes), and the one after reuses.
+    assert!(!frame(&mut r, &along).reused_all_before_volume(), "the pyramid's first reader reused");
+    assert!(r.would_reuse(&along, W, H, Method::Vsv), "the same frame again not foreseen as reused");
+    assert!(frame(&mut r, &along).reused_all_before_volume(), "the view did not settle after the reshape");
 }
 
 /// A point light's cube map does not depend on the view: no fit runs, and a camera move keeps it.

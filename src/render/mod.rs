@@ -869,10 +869,7 @@ impl Renderer {
         if let Some(aspect) = self.fit_readback.take(&self.ctx.device) {
             self.fit_aspect = Some(aspect);
         }
-        let max_side = self.ctx.device.limits().max_texture_dimension_2d;
-        let aspect = self.fit_aspect.filter(|_| self.fits_map(&setup));
-        let shaped = self.shapes_map(method);
-        let dims = self.passes.shadow_map.wanted_dims(scene, shaped, aspect, max_side);
+        let dims = self.map_dims(scene, &setup, self.fit_aspect);
         if self.passes.shadow_map.set_dims(&self.ctx.device, dims) {
             self.stale_bindings = true;
         }
@@ -1017,6 +1014,15 @@ impl Renderer {
         let Ok(mut setup) = FrameSetup::with_pruning(scene, width, height, method, self.prune) else { return false };
         self.set_frame_flags(scene, &mut setup);
         if self.variant != Some(setup.variant(&scene.medium.phase)) {
+            return false;
+        }
+        // A map to be remade in another shape (the last fit's aspect, maybe still on its way).
+        let aspect = match self.fit_readback.peek(&self.ctx.device) {
+            shadow_fit::AspectPeek::Pending => return false,
+            shadow_fit::AspectPeek::Ready(a) => a.or(self.fit_aspect),
+            shadow_fit::AspectPeek::Nothing => self.fit_aspect,
+        };
+        if self.map_dims(scene, &setup, aspect) != self.passes.shadow_map.dims {
             return false;
         }
         let (faces, shadow, _) = self.passes.shadow_map.uniforms(scene);
@@ -1255,6 +1261,14 @@ impl Renderer {
     /// those whose volume does not read the map.
     fn shapes_map(&self, method: Method) -> bool {
         self.shape_shadow_map && !matches!(method, Method::Raymarch { .. })
+    }
+
+    /// The map's width and height for the frame `setup` of `scene`, given the last fit's
+    /// `aspect` (the casters' rectangle's where the map is not fitted or none was read).
+    fn map_dims(&self, scene: &Scene, setup: &FrameSetup, aspect: Option<f32>) -> (u32, u32) {
+        let max_side = self.ctx.device.limits().max_texture_dimension_2d;
+        let aspect = aspect.filter(|_| self.fits_map(setup));
+        self.passes.shadow_map.wanted_dims(scene, self.shapes_map(setup.method), aspect, max_side)
     }
 
     /// Reads back the final and the scattered image that the frame `info` (the last one

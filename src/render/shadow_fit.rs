@@ -206,27 +206,48 @@ impl AspectReadback {
     /// The aspect of the last fit copied, once its mapping is done (a positive finite value);
     /// `None` while it is in flight or when there is none.
     pub fn take(&self, device: &wgpu::Device) -> Option<f32> {
+        match self.peek(device) {
+            AspectPeek::Ready(aspect) => {
+                self.staging.unmap();
+                self.set(Self::IDLE);
+                aspect
+            }
+            AspectPeek::Pending | AspectPeek::Nothing => {
+                if self.state() == Self::FAILED {
+                    self.set(Self::IDLE);
+                }
+                None
+            }
+        }
+    }
+
+    /// What [`AspectReadback::take`] would return, leaving it there (`Renderer::would_reuse`,
+    /// which changes nothing).
+    pub fn peek(&self, device: &wgpu::Device) -> AspectPeek {
         if self.state() == Self::MAPPING {
             // Runs the callbacks of finished mappings; does not wait.
             let _ = device.poll(wgpu::PollType::Poll);
         }
         match self.state() {
+            Self::COPIED | Self::MAPPING => AspectPeek::Pending,
             Self::MAPPED => {
                 let aspect = match self.staging.slice(..).get_mapped_range() {
                     Ok(data) => f32::from_le_bytes([data[4], data[5], data[6], data[7]]),
                     Err(_) => f32::NAN,
                 };
-                self.staging.unmap();
-                self.set(Self::IDLE);
-                Some(aspect).filter(|a| a.is_finite() && *a > 0.0)
+                AspectPeek::Ready(Some(aspect).filter(|a| a.is_finite() && *a > 0.0))
             }
-            Self::FAILED => {
-                self.set(Self::IDLE);
-                None
-            }
-            _ => None,
+            _ => AspectPeek::Nothing,
         }
     }
+}
+
+/// A look at an [`AspectReadback`]: a copy still on its way, one mapped (its aspect, `None` when
+/// not a positive finite number), or none.
+pub enum AspectPeek {
+    Pending,
+    Ready(Option<f32>),
+    Nothing,
 }
 
 /// What a fitted map depends on besides the casters' fit: the view segments, that is the camera,
