@@ -581,7 +581,9 @@ fn light_rectangle(core: &crate::scene::Aabb, view: Mat4, dims: (u32, u32)) -> (
 /// within [1/4, 4] (texels at most 2^(1/8) from square), and `current`'s step stays while the
 /// aspect lies within 3/4 of a step of it, so that a moving view seldom remakes the texture;
 /// sides are multiples of size / 32 (64 texels, llvmpipe's tile, from a 2048 budget on) and at
-/// most `max_side`. A non-finite or non-positive aspect keeps `current`'s step.
+/// most `max_side`; a side held at `max_side` leaves the other what the budget gives it (an
+/// adapter whose largest texture is the budget's side keeps the square). A non-finite or
+/// non-positive aspect keeps `current`'s step.
 pub fn sun_dims(size: u32, aspect: f32, current: (u32, u32), max_side: u32) -> (u32, u32) {
     const STEPS: f32 = 4.0;
     let step = |w: u32, h: u32| (STEPS * (w as f32 / h.max(1) as f32).log2()).round().clamp(-8.0, 8.0);
@@ -591,7 +593,13 @@ pub fn sun_dims(size: u32, aspect: f32, current: (u32, u32), max_side: u32) -> (
     let r = 2f32.powf(k / (2.0 * STEPS));
     let grain = (size / 32).clamp(1, 64);
     let side = |x: f32| (((x / grain as f32).round() as u32).max(1) * grain).min(max_side.max(1));
-    (side(size as f32 * r), side(size as f32 / r))
+    let (cap, budget) = (max_side.max(1) as f32, size as f32 * size as f32);
+    let (w, h) = match (size as f32 * r, size as f32 / r) {
+        (w, _) if w > cap => (cap, (budget / cap).min(cap)),
+        (_, h) if h > cap => ((budget / cap).min(cap), cap),
+        wh => wh,
+    };
+    (side(w), side(h))
 }
 
 #[cfg(test)]
@@ -648,7 +656,11 @@ mod tests {
         assert_ne!(sun_dims(2048, 2.39 * 2f32.powf(0.25), classroom, 16384), classroom);
         assert_eq!(sun_dims(2048, f32::NAN, classroom, 16384), classroom);
         assert_eq!(sun_dims(2048, -1.0, classroom, 16384), classroom);
-        assert_eq!(sun_dims(8192, 4.0, (8192, 8192), 8192), (8192, 4096));
+        assert_eq!(sun_dims(8192, 4.0, (8192, 8192), 16384), (16384, 4096));
+        // At the adapter's limit the other side takes the rest of the budget.
+        assert_eq!(sun_dims(8192, 4.0, (8192, 8192), 8192), (8192, 8192));
+        assert_eq!(sun_dims(2048, 2.39, square, 2048), square);
+        assert_eq!(sun_dims(2048, 2.39, square, 2560), (2560, 1664));
         // A small budget rounds to a finer grain.
         let (w, h) = sun_dims(64, 2.39, (64, 64), 16384);
         assert!((w * h) as f64 / 4096.0 > 0.9 && w > h, "{w} x {h}");
