@@ -55,10 +55,11 @@ pub struct AbArgs {
 }
 
 /// What the B side's renderer does differently from A's besides its shaders: the same choices as
-/// `--scan`, `--surface-shadows`, `--pixels` and `--eye-list` (which set both sides), for B alone, the
-/// Voxelize work list's runs, the shadow map's size and the sun map's shape. A change to the renderer's settings is
-/// then timed against the current ones in one process, like a shader edit (two binaries in
-/// alternating processes mislead on a shared machine: docs/results.md, session 35).
+/// `--scan`, `--surface-shadows`, `--pixels` and `--eye-list` (which set both sides), for B alone,
+/// the Voxelize work list's runs, the shadow map's size and the sun map's shape. A change to the
+/// renderer's settings is then timed against the current ones in one process, like a shader edit
+/// (two binaries in alternating processes mislead on a shared machine: docs/results.md,
+/// session 35).
 #[derive(clap::Args)]
 pub struct BSettings {
     /// B's --scan.

@@ -869,7 +869,7 @@ impl Renderer {
         if let Some(aspect) = self.fit_readback.take(&self.ctx.device) {
             self.fit_aspect = Some(aspect);
         }
-        let dims = self.map_dims(scene, &setup, self.fit_aspect);
+        let dims = self.map_dims(scene, method, self.fits_map(&setup), self.fit_aspect);
         if self.passes.shadow_map.set_dims(&self.ctx.device, dims) {
             self.stale_bindings = true;
         }
@@ -1022,7 +1022,7 @@ impl Renderer {
             shadow_fit::AspectPeek::Ready(a) => a.or(self.fit_aspect),
             shadow_fit::AspectPeek::Nothing => self.fit_aspect,
         };
-        if self.map_dims(scene, &setup, aspect) != self.passes.shadow_map.dims {
+        if self.map_dims(scene, method, self.fits_map(&setup), aspect) != self.passes.shadow_map.dims {
             return false;
         }
         let (faces, shadow, _) = self.passes.shadow_map.uniforms(scene);
@@ -1252,9 +1252,7 @@ impl Renderer {
         if let Some(aspect) = self.fit_readback.take(&self.ctx.device) {
             self.fit_aspect = Some(aspect);
         }
-        let max_side = self.ctx.device.limits().max_texture_dimension_2d;
-        let shaped = self.shapes_map(method);
-        self.passes.shadow_map.wanted_dims(scene, shaped, self.fit_aspect, max_side) != self.passes.shadow_map.dims
+        self.map_dims(scene, method, true, self.fit_aspect) != self.passes.shadow_map.dims
     }
 
     /// Whether `method`'s frames shape a sun's map to its rectangle ([`ShadowMap::wanted_dims`]):
@@ -1263,12 +1261,13 @@ impl Renderer {
         self.shape_shadow_map && !matches!(method, Method::Raymarch { .. })
     }
 
-    /// The map's width and height for the frame `setup` of `scene`, given the last fit's
-    /// `aspect` (the casters' rectangle's where the map is not fitted or none was read).
-    fn map_dims(&self, scene: &Scene, setup: &FrameSetup, aspect: Option<f32>) -> (u32, u32) {
+    /// The map's width and height for a frame of `scene` with `method` whose map is `fitted` or
+    /// not, given the last fit's `aspect` (the casters' rectangle's where the map is not fitted or
+    /// none was read): the one rule `prepare`, `render`'s second frame and `would_reuse` share.
+    fn map_dims(&self, scene: &Scene, method: Method, fitted: bool, aspect: Option<f32>) -> (u32, u32) {
         let max_side = self.ctx.device.limits().max_texture_dimension_2d;
-        let aspect = aspect.filter(|_| self.fits_map(setup));
-        self.passes.shadow_map.wanted_dims(scene, self.shapes_map(setup.method), aspect, max_side)
+        let aspect = aspect.filter(|_| fitted);
+        self.passes.shadow_map.wanted_dims(scene, self.shapes_map(method), aspect, max_side)
     }
 
     /// Reads back the final and the scattered image that the frame `info` (the last one

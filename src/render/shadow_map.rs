@@ -31,7 +31,7 @@ use super::util::{bindings, compute_pipeline, cull_mode, scene_vertex_layout, te
 use super::variant::{Specialised, Variant, VariantPipelines};
 use crate::gpu::{GpuError, ShaderLibrary};
 use crate::params::Light;
-use crate::scene::Scene;
+use crate::scene::{Aabb, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
@@ -275,8 +275,9 @@ impl ShadowMap {
         }
         let aspect = aspect.unwrap_or_else(|| {
             // (Margins of a huge map's half texel: none to speak of.)
-            let (lo, hi) =
-                light_rectangle(&scene.core_bounds(), Self::sun_view(scene, direction).0, (u32::MAX, u32::MAX));
+            let core = scene.core_bounds();
+            let view = Self::sun_view(&scene.bounds(), &core, direction).0;
+            let (lo, hi) = light_rectangle(&core, view, (u32::MAX, u32::MAX));
             let d = hi - lo;
             d.x / d.y
         });
@@ -432,10 +433,11 @@ impl ShadowMap {
                 // box's corners in light space: texel density where the casters are, a square
                 // around its bounding sphere wasted up to 3.5x in one axis on the classroom);
                 // along it, the whole scene (every caster on the light's side counts).
-                let (view, origin, w) = Self::sun_view(scene, direction);
+                let core = scene.core_bounds();
+                let (view, origin, w) = Self::sun_view(&b, &core, direction);
                 let depth = (origin - c).dot(w) + 2.0 * r;
                 near_or_range = depth;
-                let (lo, hi) = light_rectangle(&scene.core_bounds(), view, self.dims);
+                let (lo, hi) = light_rectangle(&core, view, self.dims);
                 let proj = glam::camera::rh::proj::directx::orthographic(lo.x, hi.x, lo.y, hi.y, 0.0, depth);
                 faces[0] = FaceUniforms { view_proj: proj * view, light: w.extend(0.0), origin: origin.extend(1.0) };
                 // The bias works in the coarser of the two texel sides.
@@ -453,13 +455,13 @@ impl ShadowMap {
         (faces, lookup, count)
     }
 
-    /// A sun's light view: from a point far on the light's side of the scene's core (its box
-    /// without backdrops), looking along the light; and that point and the unit direction toward
-    /// the light.
-    fn sun_view(scene: &Scene, direction: Vec3) -> (Mat4, Vec3, Vec3) {
-        let b = scene.bounds();
-        let (c, r) = (b.center(), b.radius().max(1e-6));
-        let cc = scene.core_bounds().center();
+    /// A sun's light view: from a point far on the light's side of the scene's core (`core`, its
+    /// box without backdrops; `bounds` the whole scene's: both walk every vertex, so the caller
+    /// passes them), looking along the light; and that point and the unit direction toward the
+    /// light.
+    fn sun_view(bounds: &Aabb, core: &Aabb, direction: Vec3) -> (Mat4, Vec3, Vec3) {
+        let (c, r) = (bounds.center(), bounds.radius().max(1e-6));
+        let cc = core.center();
         let w = direction.normalize_or(Vec3::Y);
         let origin = cc + w * ((c - cc).dot(w) + 2.0 * r);
         let up = if w.y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
@@ -605,7 +607,6 @@ pub fn sun_dims(size: u32, aspect: f32, current: (u32, u32), max_side: u32) -> (
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Aabb;
 
     /// A long, low box under a slanting sun: the map's rectangle holds every corner, touches the
     /// outermost ones within a texel on both axes, and is much narrower than the bounding sphere's
