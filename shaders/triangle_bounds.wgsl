@@ -2,7 +2,8 @@
 //
 // The importing file declares `f: Frame` and `tris: array<vec4f>` (three world vertices per
 // triangle). psi (at a point light) over a segment is extremal at its ends or at one stationary
-// point (closed form below); over a triangle, on its edges unless the axis pierces it. gamma (at
+// point (closed form below); over a triangle, on its edges unless the axis pierces it (where
+// Voxelize's items hold whole rays, from the triangle's bounding ball instead). gamma (at
 // the eye, from the axis) only culls, and comes from the triangle's bounding ball: within
 // asin(radius / distance) of its centre's. Every angle here is a bound with a margin, so they
 // come from atan2_approx (common.wgsl, 1.7e-6 rad), which took a tenth off Cull at a million
@@ -242,11 +243,20 @@ fn triangle_z_range(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
         return vec2f(min(z.x, min(z.y, z.z)), max(z.x, max(z.y, z.z)));
     }
     if (is_point_light()) {
-        // Exact, not the ball's (as gamma is): psi sets the words of bins, and a large triangle's
-        // ball would give it many more (+35% Voxelize on the built-in room). Each vertex's angle
-        // is computed once for its two edges.
         let l = f.light.xyz;
         let c = normalize(e - l);
+        // Where each Voxelize item holds all of a ray's words (WHOLE_RAY_ITEMS, a CPU adapter's
+        // list), a wider range costs no item, and Voxelize clips each plane's bins to its own
+        // segment: the bounding ball's cone gives the range from one angle and an arcsine instead
+        // of the edges' six angles, which were half of Cull's time per triangle on llvmpipe (the
+        // million-triangle room's Cull ~4 ms lower, session 42; the same bits).
+        if (WHOLE_RAY_ITEMS) {
+            let ball = bounding_ball(p0, p1, p2);
+            return ball_angle_range(ball.xyz - l, c, ball.w);
+        }
+        // Otherwise exact, not the ball's (as gamma is): psi sets the words of bins, one item
+        // each, and a large triangle's ball would give it many more (+35% Voxelize on the
+        // built-in room). Each vertex's angle is computed once for its two edges.
         let a0 = bound_angle(c, p0 - l);
         let a1 = bound_angle(c, p1 - l);
         let a2 = bound_angle(c, p2 - l);

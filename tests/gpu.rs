@@ -63,7 +63,9 @@ fn cartesian_matches_reference_for_an_axis_aligned_light() {
 /// every shape of the list must set exactly the bits that one thread per item of one word sets.
 /// The built-in room under both light types (hundreds of triangles, from one item to thousands
 /// each) at 128 bins (4 words): runs of 1, 3 (never aligned with a triangle's items), 16 and 64,
-/// and groups of 1, 3 (a short last group) and 64 words.
+/// and groups of 1, 3 (a short last group) and 64 words. Items of whole rays (64 words) also
+/// take a point light's `psi` ranges from the triangles' bounding balls in Cull
+/// (`Variant::whole_ray_items`), wider than the edges' exact ranges the others take.
 #[test]
 fn voxelize_work_lists_of_any_shape_set_the_same_bits() {
     let Some(mut r) = renderer() else { return };

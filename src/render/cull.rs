@@ -7,7 +7,10 @@
 //! behind that), and, for a directional light, one the shadow map shows behind nearer surfaces at
 //! every texel around it ([`super::ShadowPyramid`]). A kept one gets a record and `items = planes x ceil(words / words per item)`,
 //! the light-space samples it may cover in units of one plane x a group of 32-bit words of bins
-//! ([`super::Voxelize::words_per_item`]: one on a GPU, all on a CPU); an exclusive prefix sum
+//! ([`super::Voxelize::words_per_item`]: one on a GPU, all on a CPU; where an item holds all of
+//! a ray's words, [`Variant::whole_ray_items`], a point light's z range is the triangle's
+//! bounding ball's, one angle where its edges take six, since extra words then cost no item);
+//! an exclusive prefix sum
 //! over the items (1024 per workgroup, then the blocks) lets Voxelize give every item its own
 //! thread through an indirect dispatch. Scan's indirect dispatch is empty when nothing is kept, so
 //! an empty frame costs nothing.

@@ -873,7 +873,7 @@ impl Renderer {
         if self.passes.shadow_map.set_dims(&self.ctx.device, dims) {
             self.stale_bindings = true;
         }
-        let variant = setup.variant(&scene.medium.phase);
+        let variant = self.frame_variant(&setup, &scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
         // only a new light type or phase function builds, and checks, anything.
         if self.variant != Some(variant) {
@@ -977,6 +977,13 @@ impl Renderer {
         (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, eye_levels), build, eye_build)
     }
 
+    /// The shader variant of a frame set up as `setup` ([`FrameSetup::variant`]), with this
+    /// renderer's work list: whether each of Voxelize's items holds all of a ray's words.
+    fn frame_variant(&self, setup: &FrameSetup, phase: &crate::params::Phase) -> Variant {
+        let whole = self.passes.voxelize.words_per_item.saturating_mul(32) >= setup.mapping.grid.bins;
+        setup.variant(phase).with_whole_ray_items(whole)
+    }
+
     /// Whether the frame's shadow map is fitted to its view ([`ShadowFit`]): a directional light,
     /// with [`Renderer::fit_shadow_map`] on.
     fn fits_map(&self, setup: &FrameSetup) -> bool {
@@ -1013,7 +1020,7 @@ impl Renderer {
         }
         let Ok(mut setup) = FrameSetup::with_pruning(scene, width, height, method, self.prune) else { return false };
         self.set_frame_flags(scene, &mut setup);
-        if self.variant != Some(setup.variant(&scene.medium.phase)) {
+        if self.variant != Some(self.frame_variant(&setup, &scene.medium.phase)) {
             return false;
         }
         // A map to be remade in another shape (the last fit's aspect, maybe still on its way).

@@ -2,7 +2,7 @@
 //! phase function, whether the medium is grey, the grid's axes or (Integrate) whether its rays start
 //! on four words builds one pipeline per combination a frame actually uses, with the WGSL
 //! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`,
-//! `QUAD_RAYS` and `GRID_SHADOWS` (`shaders/common.wgsl`) set. The shader
+//! `QUAD_RAYS`, `GRID_SHADOWS` and `WHOLE_RAY_ITEMS` (`shaders/common.wgsl`) set. The shader
 //! compiler then folds the branches on them away when it builds the pipeline, instead of every
 //! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
 //! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
@@ -43,6 +43,11 @@ pub struct Variant {
     /// it, and those of the passes that leave the map's work out of such a frame (Composite's
     /// lookups, Cull's test of triangles the map shows hidden).
     pub grid_shadows: bool,
+    /// Each of Voxelize's items holds all of a ray's words ([`super::Voxelize::words_per_item`]
+    /// at least the grid's words per ray: a CPU adapter's list). Cull then takes a point light's
+    /// `psi` range from a triangle's bounding ball, which costs it one angle instead of six and no
+    /// item (triangle_bounds.wgsl). Only the item passes' pipelines (Cull, Voxelize) depend on it.
+    pub whole_ray_items: bool,
 }
 
 impl Variant {
@@ -58,6 +63,7 @@ impl Variant {
             cosine_bins: false,
             quad_rays: true,
             grid_shadows: false,
+            whole_ray_items: false,
         }
     }
 
@@ -76,9 +82,14 @@ impl Variant {
         Variant { grid_shadows, ..self }
     }
 
+    /// The same variant for a work list whose items do (or do not) hold all of a ray's words.
+    pub fn with_whole_ray_items(self, whole_ray_items: bool) -> Variant {
+        Variant { whole_ray_items, ..self }
+    }
+
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 7] {
+    pub fn constants(&self) -> [(&'static str, f64); 8] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("POINT_LIGHT", b(self.point_light)),
@@ -88,6 +99,7 @@ impl Variant {
             ("COSINE_BINS", b(self.cosine_bins)),
             ("QUAD_RAYS", b(self.quad_rays)),
             ("GRID_SHADOWS", b(self.grid_shadows)),
+            ("WHOLE_RAY_ITEMS", b(self.whole_ray_items)),
         ]
     }
 
@@ -126,15 +138,16 @@ pub enum Specialised {
     /// The light, the phase and whether the medium is grey (the passes that evaluate
     /// transmittance per sample: the ray march).
     LightPhaseAndMedium,
-    /// The light and the grid's axes (the voxel passes: Ranges, Voxelize).
+    /// The light and the grid's axes (Ranges).
     LightAndGrid,
     /// The light and where the surfaces' shadows come from (Composite: the shadow map's lookups
     /// compile out of a grid-shadow frame's pipeline).
     LightAndSurfaceShadows,
-    /// The light, the grid's axes and where the surfaces' shadows come from (Cull: its test of
-    /// triangles the shadow map shows hidden compiles out of a grid-shadow frame's pipeline).
+    /// The light, the grid's axes, where the surfaces' shadows come from (Cull: its test of
+    /// triangles the shadow map shows hidden compiles out of a grid-shadow frame's pipeline) and
+    /// whether the work list's items hold whole rays (Cull's `psi` ranges): Cull, Voxelize.
     LightGridAndSurfaceShadows,
-    /// Everything: Integrate.
+    /// Everything but the work list's items: Integrate.
     All,
 }
 
@@ -142,6 +155,12 @@ impl Specialised {
     /// Whether the pass builds a pipeline of its own for grid-shadow frames ([`Variant::grid_shadows`]).
     fn reads_surface_shadows(self) -> bool {
         matches!(self, Specialised::LightAndSurfaceShadows | Specialised::LightGridAndSurfaceShadows | Specialised::All)
+    }
+
+    /// Whether the pass builds a pipeline of its own for a work list of whole-ray items
+    /// ([`Variant::whole_ray_items`]): the passes that make and take the items (Cull, Voxelize).
+    fn reads_item_layout(self) -> bool {
+        self == Specialised::LightGridAndSurfaceShadows
     }
 }
 
@@ -158,9 +177,12 @@ impl<P> VariantPipelines<P> {
 
     /// The variant this pass's pipeline for `v` is built for (the phase dropped when unread).
     pub fn key(&self, v: Variant) -> Variant {
-        // Only Integrate (`All`) reads QUAD_RAYS, and only the passes named for it GRID_SHADOWS:
-        // the others share one pipeline across grids and surface shadows.
+        // Only Integrate (`All`) reads QUAD_RAYS, and only the passes named for them GRID_SHADOWS
+        // and WHOLE_RAY_ITEMS: the others share one pipeline across grids, surface shadows and
+        // work lists.
         let grid_shadows = v.grid_shadows && self.reads.reads_surface_shadows();
+        let whole_ray_items = v.whole_ray_items && self.reads.reads_item_layout();
+        let v = Variant { whole_ray_items, ..v };
         let v_any_rays = Variant { quad_rays: true, grid_shadows, ..v };
         let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
@@ -181,10 +203,11 @@ impl<P> VariantPipelines<P> {
         if self.get(v).is_none() {
             let light = if key.point_light { "point light" } else { "directional light" };
             let shadows = if key.grid_shadows { ", grid shadows" } else { "" };
+            let items = if key.whole_ray_items { ", whole-ray items" } else { "" };
             let label = match self.reads {
                 Specialised::Light | Specialised::LightAndSurfaceShadows => format!("[{light}{shadows}]"),
                 Specialised::LightAndGrid | Specialised::LightGridAndSurfaceShadows => {
-                    format!("[{light}{}{shadows}]", key.grid_name())
+                    format!("[{light}{}{shadows}{items}]", key.grid_name())
                 }
                 Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
                 // Only Integrate tells the grid's ray alignment and the surface shadows apart
@@ -296,11 +319,14 @@ mod tests {
                 for (phase, (cartesian, cosine_bins)) in
                     phases.iter().flat_map(|p| [(false, false), (false, true), (true, false)].map(|g| (p, g)))
                 {
-                    for (quad_rays, grid_shadows) in [(true, false), (false, false), (true, true)] {
+                    for (quad_rays, grid_shadows, whole_ray_items) in
+                        [(true, false, false), (false, false, false), (true, true, false), (true, false, true)]
+                    {
                         let v = Variant::new(point_light, phase, sigma_t)
                             .with_grid(cartesian, cosine_bins)
                             .with_quad_rays(quad_rays)
-                            .with_grid_shadows(grid_shadows);
+                            .with_grid_shadows(grid_shadows)
+                            .with_whole_ray_items(whole_ray_items);
                         let constants: naga::back::PipelineConstants =
                             v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
                         for ep in &module.entry_points {
@@ -340,6 +366,7 @@ mod tests {
         assert!(common.contains("override GREY_MEDIUM"));
         assert!(common.contains("override CARTESIAN") && common.contains("override COSINE_BINS"));
         assert!(common.contains("override QUAD_RAYS") && common.contains("override GRID_SHADOWS"));
+        assert!(common.contains("override WHOLE_RAY_ITEMS"));
     }
 
     #[test]
@@ -387,7 +414,13 @@ mod tests {
             shared.prepare(v, |c, _| {
                 assert_eq!(
                     &c[3..],
-                    &[("CARTESIAN", 0.0), ("COSINE_BINS", 0.0), ("QUAD_RAYS", 1.0), ("GRID_SHADOWS", 0.0)]
+                    &[
+                        ("CARTESIAN", 0.0),
+                        ("COSINE_BINS", 0.0),
+                        ("QUAD_RAYS", 1.0),
+                        ("GRID_SHADOWS", 0.0),
+                        ("WHOLE_RAY_ITEMS", 0.0)
+                    ]
                 )
             });
             voxels.prepare(v, |c, _| {
@@ -409,10 +442,11 @@ mod tests {
 
     /// Whether the grid's rays start on four words changes Integrate's pipeline only; whether the
     /// surfaces' shadows come from the grid changes Integrate's and those of the passes that leave
-    /// the map's work out (Composite, Cull), and neither the voxel passes' nor the map's. Neither
+    /// the map's work out (Composite, Cull), and neither the voxel passes' nor the map's; whether
+    /// the work list's items hold whole rays changes only the item passes' (Cull, Voxelize). None
     /// is in the name users see.
     #[test]
-    fn the_rays_alignment_and_grid_shadows_specialise_only_the_passes_that_read_them() {
+    fn the_rays_alignment_grid_shadows_and_items_specialise_only_the_passes_that_read_them() {
         let sun = Variant::new(false, &Phase::Isotropic, GREY);
         let plain = "[directional light, isotropic, grey medium".to_string();
         for (other, i, name, (base, changed), suffix, readers) in [
@@ -424,6 +458,14 @@ mod tests {
                 (0.0, 1.0),
                 ", grid shadows",
                 vec![Specialised::All, Specialised::LightAndSurfaceShadows, Specialised::LightGridAndSurfaceShadows],
+            ),
+            (
+                sun.with_whole_ray_items(true),
+                7,
+                "WHOLE_RAY_ITEMS",
+                (0.0, 1.0),
+                ", whole-ray items",
+                vec![Specialised::LightGridAndSurfaceShadows],
             ),
         ] {
             for reads in [
@@ -448,7 +490,7 @@ mod tests {
                 if reader {
                     assert!(labels[1].ends_with(&format!("{suffix}]")) && !labels[0].contains(suffix), "{labels:?}");
                 }
-                if reads == Specialised::All {
+                if reads == Specialised::All && reader {
                     assert_eq!(labels, [format!("{plain}]"), format!("{plain}{suffix}]")]);
                 }
             }
@@ -460,6 +502,9 @@ mod tests {
         let mut cull = VariantPipelines::new(Specialised::LightGridAndSurfaceShadows);
         cull.prepare(sun.with_grid(true, false).with_grid_shadows(true), |_, label| {
             assert_eq!(label, "[directional light, cartesian grid, grid shadows]")
+        });
+        cull.prepare(sun.with_whole_ray_items(true), |_, label| {
+            assert_eq!(label, "[directional light, whole-ray items]")
         });
     }
 
