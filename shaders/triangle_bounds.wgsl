@@ -249,7 +249,7 @@ fn triangle_z_range(p0: vec3f, p1: vec3f, p2: vec3f) -> vec2f {
         // list), a wider range costs no item, and Voxelize clips each plane's bins to its own
         // segment: the bounding ball's cone gives the range from one angle and an arcsine instead
         // of the edges' six angles, which were half of Cull's time per triangle on llvmpipe (the
-        // million-triangle room's Cull ~4 ms lower, session 42; the same bits).
+        // million-triangle room's Cull ~3 ms lower, session 42; the same bits).
         if (WHOLE_RAY_ITEMS) {
             let ball = bounding_ball(p0, p1, p2);
             return ball_angle_range(ball.xyz - l, c, ball.w);

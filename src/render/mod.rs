@@ -875,7 +875,7 @@ impl Renderer {
         }
         let variant = self.frame_variant(&setup, &scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
-        // only a new light type or phase function builds, and checks, anything.
+        // only a new light type, phase function or work list builds, and checks, anything.
         if self.variant != Some(variant) {
             self.passes.prepare(&self.ctx, variant)?;
             self.variant = Some(variant);
