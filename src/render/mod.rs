@@ -980,7 +980,7 @@ impl Renderer {
     /// The shader variant of a frame set up as `setup` ([`FrameSetup::variant`]), with this
     /// renderer's work list: whether each of Voxelize's items holds all of a ray's words.
     fn frame_variant(&self, setup: &FrameSetup, phase: &crate::params::Phase) -> Variant {
-        let whole = self.passes.voxelize.words_per_item.saturating_mul(32) >= setup.mapping.grid.bins;
+        let whole = self.passes.voxelize.words_per_item >= setup.mapping.grid.words();
         setup.variant(phase).with_whole_ray_items(whole)
     }
 
