@@ -209,3 +209,38 @@ fn pruned_plane_rays_change_no_pixel() {
     r.prune_plane_rays = true;
     assert!(least_kept < 0.8, "no scene left out a fifth of the cells ({least_kept})");
 }
+
+/// On a CPU adapter a VSV frame clears only the cells its passes write (each plane's kept ray
+/// cells, `Renderer::clear_kept_cells`), so words an earlier frame left outside them stay in the
+/// buffer. Nothing may read them: after a frame that wrote every cell, a pruned frame gives the
+/// same grid (as `read_grid` shows it) and the same images whether it cleared the kept cells or
+/// the whole grid. The earlier frame must have left words outside the kept cells, or the test
+/// could not fail.
+#[test]
+fn clearing_only_the_kept_cells_changes_no_bit() {
+    let Some(mut r) = renderer() else { return };
+    r.reuse_unchanged = false;
+    let mut s = base(point_light(Vec3::new(0.3, 2.6, -1.0)));
+    s.camera.target = Vec3::new(0.0, 1.8, 0.0);
+    let mut frames = Vec::new();
+    for clear_kept_cells in [true, false] {
+        r.clear_kept_cells = clear_kept_cells;
+        r.prune_plane_rays = false;
+        r.render(&s, 80, 64, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        let every_cell = r.read_grid().unwrap_or_else(|e| panic!("{e}"));
+        r.prune_plane_rays = true;
+        let out = r.render(&s, 80, 64, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        let report = r.prune_report(&out.info()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(report.plane_ray_cells < 0.8, "too few cells left out: {}", report.plane_ray_cells);
+        let grid = r.read_grid().unwrap_or_else(|e| panic!("{e}"));
+        let left = every_cell.iter().zip(&grid).filter(|(a, b)| **a != 0 && **b == 0).count();
+        assert!(left > 0, "the frame of every cell left nothing where the pruned frame reads zeros");
+        frames.push((grid, out.scatter, out.hdr));
+    }
+    r.clear_kept_cells = true;
+    let (kept, whole) = (&frames[0], &frames[1]);
+    assert!(kept.0 == whole.0, "the grid differs with the kept cells' clear");
+    assert!(kept.1.pixels == whole.1.pixels, "the scattered light differs with the kept cells' clear");
+    assert!(kept.2.pixels == whole.2.pixels, "the final image differs with the kept cells' clear");
+    assert!(kept.1.pixels.iter().any(|p| p[0] > 0.0), "nothing scatters");
+}

@@ -89,6 +89,10 @@ pub struct BSettings {
     /// (`Renderer::shape_shadow_map` off).
     #[arg(id = "b_square_map", long = "b-square-map")]
     pub square_map: bool,
+    /// B clears the whole grid before Voxelize instead of only the cells its passes write
+    /// (`Renderer::clear_kept_cells` off; it is on for CPU adapters).
+    #[arg(id = "b_whole_grid_clear", long = "b-whole-grid-clear")]
+    pub whole_grid_clear: bool,
 }
 
 impl BSettings {
@@ -109,6 +113,9 @@ impl BSettings {
         }
         if self.square_map {
             renderer.shape_shadow_map = false;
+        }
+        if self.whole_grid_clear {
+            renderer.clear_kept_cells = false;
         }
         Ok(())
     }
@@ -139,6 +146,9 @@ impl BSettings {
         }
         if self.square_map {
             flags.push("--b-square-map".into());
+        }
+        if self.whole_grid_clear {
+            flags.push("--b-whole-grid-clear".into());
         }
         flags
     }

@@ -56,6 +56,8 @@ use crate::gpu::{GpuContext, GpuError, GpuTimer, ShaderLibrary};
 use crate::image::Image;
 use crate::params::{Baseline, Grid};
 use crate::scene::Scene;
+use std::ops::Range;
+use std::sync::Arc;
 use util::texture_2d;
 use wgpu::util::DeviceExt;
 
@@ -415,6 +417,13 @@ pub struct Renderer {
     /// rectangle it covers, for about as many texels as the budget's square
     /// ([`ShadowMap::wanted_dims`]). On by default; off only to compare.
     pub shape_shadow_map: bool,
+    /// VSV frames clear only the grid's cells their passes write (each plane's kept ray cells,
+    /// [`GridMapping::plane_rays`], neighbouring runs merged) instead of the whole grid. Where the
+    /// adapter is a CPU a clear is a `memset` on one thread at memory speed (the classroom's
+    /// 100 MB grid ~10 ms on a 2-core Xeon, of which its kept 61% of the cells need ~6;
+    /// docs/results.md, session 43); on a GPU every clear is a dispatch of its own, and a plane's
+    /// worth of them would cost more than the whole grid's. On for CPU adapters.
+    pub clear_kept_cells: bool,
     /// VSV frames take the surfaces' shadows from the shadow volume instead of a shadow map
     /// (Integrate reads them from the same bits: `integrate.wgsl`, "surface shadows"), and draw no
     /// shadow map at all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The
@@ -479,6 +488,13 @@ pub struct Renderer {
     /// changes: what it holds was computed from that key, and keeps that share of the cells
     /// ([`PruneReport::plane_ray_cells`]).
     plane_rays: Option<(wgpu::Buffer, Option<(PlaneRaysKey, f64)>)>,
+    /// The grid's bytes that the cells in `plane_rays` take ([`kept_byte_ranges`]), which a frame
+    /// clears when [`Renderer::clear_kept_cells`] is on.
+    kept_bytes: Arc<[Range<u64>]>,
+    /// The bytes the last frame that voxelized cleared and its passes wrote (Voxelize and Scan
+    /// never leave the kept cells): [`Renderer::read_grid`] reads the rest as zero, what was left
+    /// there by earlier frames is no part of this one.
+    grid_written: Arc<[Range<u64>]>,
     /// A copy of the grid taken between voxelize and scan (the geometry voxels), kept only while
     /// [`Renderer::set_keep_geometry_grid`] asks for it (the editor's inspector).
     geometry_copy: Option<wgpu::Buffer>,
@@ -515,6 +531,7 @@ impl Renderer {
         let timer = GpuTimer::new(&ctx);
         let fit_readback = shadow_fit::AspectReadback::new(&ctx.device);
         let scan_columns = ctx.info.device_type != wgpu::DeviceType::Cpu;
+        let clear_kept_cells = ctx.info.device_type == wgpu::DeviceType::Cpu;
         Ok(Renderer {
             ctx,
             passes,
@@ -528,6 +545,7 @@ impl Renderer {
             eye_occlusion_culling: true,
             fit_shadow_map: true,
             shape_shadow_map: true,
+            clear_kept_cells,
             grid_shadows: false,
             adaptive_pixels: true,
             prune_plane_rays: true,
@@ -546,6 +564,8 @@ impl Renderer {
             targets: None,
             grid: None,
             plane_rays: None,
+            kept_bytes: Arc::from([]),
+            grid_written: Arc::from([]),
             geometry_copy: None,
             keep_geometry: false,
             variant: None,
@@ -776,6 +796,8 @@ impl Renderer {
         });
         self.grid = Some((grid, bits));
         self.plane_rays = Some((plane_rays, None));
+        // (A new buffer is all zeros: nothing is left to hide.)
+        self.grid_written = Arc::from([0..grid.bytes()]);
         self.geometry_copy = None;
         self.stale_bindings = true;
         Ok(())
@@ -925,6 +947,7 @@ impl Renderer {
             vec![[0, grid.rays]; grid.planes as usize]
         };
         self.ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&cells));
+        self.kept_bytes = kept_byte_ranges(&grid, &cells).into();
         let kept: u64 = cells.iter().map(|c| u64::from(c[1] - c[0])).sum();
         *written = Some((key, kept as f64 / (grid.planes as f64 * grid.rays as f64)));
     }
@@ -1147,7 +1170,15 @@ impl Renderer {
                         p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
                         f.mark(Pass::Ranges);
                     }
-                    f.enc.clear_buffer(bits, 0, None);
+                    if self.clear_kept_cells {
+                        for r in self.kept_bytes.iter() {
+                            f.enc.clear_buffer(bits, r.start, Some(r.end - r.start));
+                        }
+                        self.grid_written = self.kept_bytes.clone();
+                    } else {
+                        f.enc.clear_buffer(bits, 0, None);
+                        self.grid_written = Arc::from([0..bits.size()]);
+                    }
                     p.cull.begin_frame(&mut f.enc);
                     // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
                     for chunk in 0..p.cull.chunks() {
@@ -1359,7 +1390,19 @@ impl Renderer {
     /// (`plane`, `ray`) starts at [`Grid::ray_offset`]), for the inspector and tests.
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
         let (_, bits) = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
-        Ok(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(bits)?))
+        Ok(self.zero_unwritten(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(bits)?)))
+    }
+
+    /// `words` (the grid or its geometry copy) with every word outside the last voxelizing frame's
+    /// cleared cells set to zero: what a clear of the whole grid would have left there.
+    fn zero_unwritten(&self, mut words: Vec<u32>) -> Vec<u32> {
+        let mut from = 0usize;
+        for r in self.grid_written.iter().chain(std::iter::once(&(words.len() as u64 * 4..u64::MAX))) {
+            let to = ((r.start / 4) as usize).min(words.len());
+            words[from.min(to)..to].fill(0);
+            from = (r.end / 4) as usize;
+        }
+        words
     }
 
     /// Keep a copy of the geometry voxels (the grid before the scan) of every following frame, for
@@ -1377,7 +1420,7 @@ impl Renderer {
         let b = self.geometry_copy.as_ref().filter(|_| self.keep_geometry).ok_or_else(|| {
             GpuError::Readback("the geometry grid is not kept (Renderer::set_keep_geometry_grid)".into())
         })?;
-        Ok(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(b)?))
+        Ok(self.zero_unwritten(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(b)?)))
     }
 
     /// Uploads raw grid words (tests use it to check the scan in isolation).
@@ -1387,6 +1430,44 @@ impl Renderer {
             contents: bytemuck::cast_slice(data),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         })
+    }
+}
+
+/// The grid's byte ranges that per-plane ray cells `cells` ([`GridMapping::plane_rays`]: plane
+/// `p` keeps cells `cells[p][0]..cells[p][1]`) take in its plane-major layout
+/// ([`Grid::ray_offset`]), in order, with runs that touch merged into one.
+pub fn kept_byte_ranges(grid: &Grid, cells: &[[u32; 2]]) -> Vec<Range<u64>> {
+    let mut ranges: Vec<Range<u64>> = Vec::new();
+    for (plane, c) in cells.iter().enumerate() {
+        if c[1] <= c[0] {
+            continue;
+        }
+        let start = grid.ray_offset(plane as u32, c[0]) as u64 * 4;
+        let end = grid.ray_offset(plane as u32, c[1]) as u64 * 4;
+        match ranges.last_mut() {
+            Some(last) if last.end == start => last.end = end,
+            _ => ranges.push(start..end),
+        }
+    }
+    ranges
+}
+
+#[cfg(test)]
+mod kept_byte_ranges_tests {
+    use super::*;
+
+    #[test]
+    fn ranges_follow_the_plane_major_layout_and_merge_where_they_touch() {
+        let grid = Grid { planes: 4, rays: 8, bins: 64, ..Grid::default() };
+        let ray = 2 * 4; // two words of four bytes
+                         // Plane 0 keeps its last cells and plane 1 its first: one run across the boundary.
+                         // Plane 2 keeps none; plane 3 keeps cells 2..5.
+        let cells = [[5, 8], [0, 3], [4, 4], [2, 5]];
+        let r = kept_byte_ranges(&grid, &cells);
+        assert_eq!(r, vec![5 * ray..11 * ray, (3 * 8 + 2) * ray..(3 * 8 + 5) * ray]);
+        let all = kept_byte_ranges(&grid, &[[0, 8]; 4]);
+        assert_eq!(all, vec![0..grid.bytes()]);
+        assert!(kept_byte_ranges(&grid, &[[0, 0]; 4]).is_empty());
     }
 }
 
