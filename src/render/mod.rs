@@ -420,7 +420,7 @@ pub struct Renderer {
     /// VSV frames clear only the grid's cells their passes write (each plane's kept ray cells,
     /// [`GridMapping::plane_rays`], neighbouring runs merged) instead of the whole grid. Where the
     /// adapter is a CPU a clear is a `memset` on one thread at memory speed (the classroom's
-    /// 100 MB grid ~10 ms on a 2-core Xeon, of which its kept 61% of the cells need ~6;
+    /// 100 MB grid ~10 ms on a 2-core Xeon, its kept 61% of the cells ~7;
     /// docs/results.md, session 43); on a GPU every clear is a dispatch of its own, and a plane's
     /// worth of them would cost more than the whole grid's. On for CPU adapters.
     pub clear_kept_cells: bool,
@@ -797,7 +797,7 @@ impl Renderer {
         self.grid = Some((grid, bits));
         self.plane_rays = Some((plane_rays, None));
         // (A new buffer is all zeros: nothing is left to hide.)
-        self.grid_written = Arc::from([0..grid.bytes()]);
+        self.grid_written = whole_range(grid.bytes());
         self.geometry_copy = None;
         self.stale_bindings = true;
         Ok(())
@@ -1177,7 +1177,7 @@ impl Renderer {
                         self.grid_written = self.kept_bytes.clone();
                     } else {
                         f.enc.clear_buffer(bits, 0, None);
-                        self.grid_written = Arc::from([0..bits.size()]);
+                        self.grid_written = whole_range(bits.size());
                     }
                     p.cull.begin_frame(&mut f.enc);
                     // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
@@ -1433,10 +1433,15 @@ impl Renderer {
     }
 }
 
+/// One range over all of a buffer's `bytes`.
+fn whole_range(bytes: u64) -> Arc<[Range<u64>]> {
+    std::iter::once(0..bytes).collect()
+}
+
 /// The grid's byte ranges that per-plane ray cells `cells` ([`GridMapping::plane_rays`]: plane
 /// `p` keeps cells `cells[p][0]..cells[p][1]`) take in its plane-major layout
 /// ([`Grid::ray_offset`]), in order, with runs that touch merged into one.
-pub fn kept_byte_ranges(grid: &Grid, cells: &[[u32; 2]]) -> Vec<Range<u64>> {
+fn kept_byte_ranges(grid: &Grid, cells: &[[u32; 2]]) -> Vec<Range<u64>> {
     let mut ranges: Vec<Range<u64>> = Vec::new();
     for (plane, c) in cells.iter().enumerate() {
         if c[1] <= c[0] {
@@ -1459,9 +1464,9 @@ mod kept_byte_ranges_tests {
     #[test]
     fn ranges_follow_the_plane_major_layout_and_merge_where_they_touch() {
         let grid = Grid { planes: 4, rays: 8, bins: 64, ..Grid::default() };
-        let ray = 2 * 4; // two words of four bytes
-                         // Plane 0 keeps its last cells and plane 1 its first: one run across the boundary.
-                         // Plane 2 keeps none; plane 3 keeps cells 2..5.
+        // A ray is two words of four bytes. Plane 0 keeps its last cells and plane 1 its first:
+        // one run across the boundary. Plane 2 keeps none; plane 3 keeps cells 2..5.
+        let ray = 2 * 4;
         let cells = [[5, 8], [0, 3], [4, 4], [2, 5]];
         let r = kept_byte_ranges(&grid, &cells);
         assert_eq!(r, vec![5 * ray..11 * ray, (3 * 8 + 2) * ray..(3 * 8 + 5) * ray]);
