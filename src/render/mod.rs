@@ -1396,12 +1396,16 @@ impl Renderer {
     /// `words` (the grid or its geometry copy) with every word outside the last voxelizing frame's
     /// cleared cells set to zero: what a clear of the whole grid would have left there.
     fn zero_unwritten(&self, mut words: Vec<u32>) -> Vec<u32> {
-        let mut from = 0usize;
-        for r in self.grid_written.iter().chain(std::iter::once(&(words.len() as u64 * 4..u64::MAX))) {
-            let to = ((r.start / 4) as usize).min(words.len());
-            words[from.min(to)..to].fill(0);
-            from = (r.end / 4) as usize;
+        let len = words.len();
+        let word = |byte: u64| ((byte / 4) as usize).min(len);
+        // The ranges are in order and apart: zero each gap before one, then the tail.
+        let mut from = 0;
+        for r in self.grid_written.iter() {
+            let (start, end) = (word(r.start), word(r.end));
+            words[from.min(start)..start].fill(0);
+            from = end;
         }
+        words[from..].fill(0);
         words
     }
 
