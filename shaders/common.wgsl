@@ -34,6 +34,7 @@ override CARTESIAN: bool = false;   // the screen-space Cartesian grid (the pape
 override COSINE_BINS: bool = false; // bins uniform in cos(psi) (point lights only), else uniform in psi / r
 override QUAD_RAYS: bool = true;    // every grid ray starts on four words (bins a multiple of 128): Integrate reads them as vec4u
 override GRID_SHADOWS: bool = false; // the surfaces' shadows come from the shadow volume: Integrate computes them, no map is drawn (Integrate, Composite, Cull)
+override EXACT_SHADOWS: bool = false; // the surfaces' sun shadows come from exact_shadows.wgsl's test against the triangles, not the map (Composite)
 override WHOLE_RAY_ITEMS: bool = false; // each Voxelize item holds all of a ray's words (a CPU adapter's list): Cull may give a triangle more words than it spans at no cost (triangle_bounds.wgsl)
 
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)

@@ -7,7 +7,8 @@
 //   lit from behind stays dark in front)
 //   V: the shadow map's 2x2 filtered test, or in a grid-shadow frame (GRID_SHADOWS, a VSV frame
 //   that draws no map) the shadow volume's, which Integrate wrote in the scattered light's alpha
-//   (integrate.wgsl)
+//   (integrate.wgsl), or under a sun with exact shadows (EXACT_SHADOWS) the test of the point
+//   against the triangles (exact_shadows.wgsl)
 //   point:        E_in = I0 * exp(-sigma_t d) / (d^2 + r^2)
 //   directional:  E_in = E0 * exp(-sigma_t l(P)),  l = path toward the light inside the medium box
 //
@@ -29,6 +30,9 @@
 @group(0) @binding(6) var distance: texture_2d<f32>;
 @group(0) @binding(7) var scatter: texture_2d<f32>;
 @group(0) @binding(8) var hdr: texture_storage_2d<rgba32float, write>;
+// Per pixel 1 where the sun reaches the surface, 0 where a triangle hides it (EXACT_SHADOWS:
+// exact_shadows.wgsl; unread otherwise).
+@group(0) @binding(9) var<storage, read> exact_vis: array<u32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters"). A
 // pixel's lookup read the map's parameters inside its branches, where llvmpipe loads a storage
@@ -65,9 +69,9 @@ fn slope_bias(texel: f32, cos_i: f32) -> f32 {
 }
 
 // Direct light leaving the surface point p toward the eye (before the view path's attenuation).
-// `grid_vis`: the visibility Integrate read from the shadow volume (GRID_SHADOWS), which then
-// stands for the map's.
-fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32, grid_vis: f32) -> vec3f {
+// `given_vis`: the visibility Integrate read from the shadow volume (GRID_SHADOWS) or the exact
+// test's (EXACT_SHADOWS), which then stands for the map's.
+fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32, given_vis: f32) -> vec3f {
     // Lit from behind (or edge-on): dark in front. The shadow lookups are skipped too.
     if (cos_i <= 0.0) { return vec3f(0.0); }
     // A texel of the map spans params.y scene units (directional) or params.y per unit of distance
@@ -88,10 +92,10 @@ fn surface_light(p: vec3f, albedo: vec3f, cos_i: f32, grid_vis: f32) -> vec3f {
         }
         e_in = f.light_power.xyz * exp(-f.sigma_t.xyz * l);
     }
-    var vis = grid_vis;
+    var vis = given_vis;
     // A pipeline constant, not the frame's flag: llvmpipe runs the map's lookups behind a run-time
     // flag in every pixel of a grid-shadow frame, which cost its Composite a third (session 29).
-    if (!GRID_SHADOWS) { vis = visibility(p, slope_bias(texel, cos_i)); }
+    if (!(GRID_SHADOWS || EXACT_SHADOWS)) { vis = visibility(p, slope_bias(texel, cos_i)); }
     return albedo / PI * cos_i * e_in * vis;
 }
 
@@ -112,7 +116,9 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
             path = max(0.0, min(span.y, t) - span.x);
         }
         let m = textureLoad(material, p, 0);
-        c += surface_light(f.eye.xyz + v * t, m.xyz, m.w, s.w) * exp(-f.sigma_t.xyz * path);
+        var given_vis = s.w;
+        if (EXACT_SHADOWS) { given_vis = f32(exact_vis[id.y * f.image.x + id.x]); }
+        c += surface_light(f.eye.xyz + v * t, m.xyz, m.w, given_vis) * exp(-f.sigma_t.xyz * path);
     }
     textureStore(hdr, p, vec4f(c, 1.0));
 }

@@ -803,6 +803,11 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw no shadow map, \
          and `final` shows what that does to the surfaces"
             .into()
+    } else if renderer.exact_shadows {
+        "VSV's surface shadows under a sun: each surface point tested against the triangles (`--surface-shadows \
+         exact`, `exact_shadows` in the table, counted in its volume time): its frames after the first draw no \
+         shadow map (a point light's keep the cube map)"
+            .into()
     } else {
         "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)".into()
     });

@@ -84,14 +84,19 @@ pub enum ScanBy {
     Columns,
 }
 
-/// Where a VSV frame's surface shadows come from (`Renderer::grid_shadows`).
+/// Where a VSV frame's surface shadows come from (`Renderer::grid_shadows`,
+/// `Renderer::exact_shadows`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
 pub enum SurfaceShadows {
     /// The shadow volume itself (integrate.wgsl, "surface shadows"): no shadow map is drawn, and
     /// the shadows are as sharp as the grid's bins.
     Grid,
-    /// The shadow map, like the baseline's surfaces: the default.
+    /// The shadow map, like the baseline's surfaces.
     Map,
+    /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
+    /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
+    /// lights use the map.
+    Exact,
 }
 
 /// Which pixels VSV's Integrate integrates (`Renderer::adaptive_pixels`).
@@ -145,6 +150,7 @@ impl PassChoices {
         }
         if let Some(from) = self.surface_shadows {
             renderer.grid_shadows = from == SurfaceShadows::Grid;
+            renderer.exact_shadows = from == SurfaceShadows::Exact;
         }
         if let Some(pixels) = self.pixels {
             renderer.adaptive_pixels = pixels == Pixels::Adaptive;
@@ -599,7 +605,12 @@ pub fn render(args: RenderArgs) -> Result<()> {
             j["ranges"] = serde_json::json!({
                 "phi0": m.phi0, "phi_span": m.phi_span, "gamma": [m.gamma_lo, m.gamma_hi], "z": [m.z_lo, m.z_hi],
             });
-            j["surface_shadows"] = serde_json::json!(if o.setup.grid_shadowed() { "grid" } else { "map" });
+            let from = match (o.setup.grid_shadowed(), o.setup.exact_shadowed()) {
+                (true, _) => "grid",
+                (false, true) => "exact",
+                (false, false) => "map",
+            };
+            j["surface_shadows"] = serde_json::json!(from);
             if let Some(adaptive) = adaptive_pixels {
                 j["integrated_pixels"] = serde_json::json!(if adaptive { "adaptive" } else { "all" });
             }

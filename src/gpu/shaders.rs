@@ -22,6 +22,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),
     ("integrate.wgsl", include_str!("../../shaders/integrate.wgsl")),
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),
+    ("exact_shadows.wgsl", include_str!("../../shaders/exact_shadows.wgsl")),
     ("display.wgsl", include_str!("../../shaders/display.wgsl")),
     ("ranges.wgsl", include_str!("../../shaders/ranges.wgsl")),
     ("shadow_fit.wgsl", include_str!("../../shaders/shadow_fit.wgsl")),

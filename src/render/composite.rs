@@ -2,7 +2,10 @@
 //! (`shaders/composite.wgsl`):
 //!
 //!   L_pixel = L_surface * T_view + L_scatter,   T_view = exp(-sigma_t * (the view path's length in the medium))
-//!   L_surface = albedo / pi * max(cos theta_i, 0) * V_shadow_map * E_in
+//!   L_surface = albedo / pi * max(cos theta_i, 0) * V * E_in
+//!
+//! (V: the shadow map's filtered test, or the shadow volume's [`super::Renderer::grid_shadows`],
+//! or under a sun the test against the triangles [`super::ExactShadows`].)
 //!
 //! Deferred lighting: Surface wrote the nearest surface's albedo, `cos theta_i` and distance, and
 //! each pixel is lit once here at `P = eye + t v`. (The medium is unbounded for a point light and
@@ -25,6 +28,7 @@ bindings! {
         distance: Kind::Texture,
         scatter: Kind::Texture,
         hdr: Kind::StorageTexture(Composite::OUTPUT),
+        exact_vis: Kind::Storage,
     }
 }
 

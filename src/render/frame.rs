@@ -20,6 +20,10 @@ pub const FLAG_GRID_SHADOWS: u32 = 32;
 /// Voxelize skips the hidden ones (cull.wgsl `hidden_blocks`): set by the renderer unless
 /// [`super::Renderer::hidden_blocks`] is off.
 pub const FLAG_HIDDEN_BLOCKS: u32 = 64;
+/// The surfaces' sun shadows are tested against the triangles ([`super::ExactShadows`]), not
+/// looked up in the shadow map: set by the renderer ([`super::Renderer::exact_shadows`]). Read on
+/// the CPU only, like [`FLAG_GRID_SHADOWS`].
+pub const FLAG_EXACT_SHADOWS: u32 = 128;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
 #[repr(C)]
@@ -142,6 +146,12 @@ impl FrameSetup {
         self.uniforms.image.w & FLAG_GRID_SHADOWS != 0
     }
 
+    /// Whether the frame's surfaces take the sun's shadow from [`super::ExactShadows`]
+    /// ([`FLAG_EXACT_SHADOWS`]): its map is drawn only to make Cull's pyramid.
+    pub fn exact_shadowed(&self) -> bool {
+        self.uniforms.image.w & FLAG_EXACT_SHADOWS != 0
+    }
+
     /// The shader variant this frame's passes run as: its light, `phase`, medium, grid axes
     /// (cosine bins only where the method has bins) and surface shadows.
     pub fn variant(&self, phase: &crate::params::Phase) -> super::Variant {
@@ -151,6 +161,7 @@ impl FrameSetup {
             .with_grid(self.method == Method::Cartesian, cosine)
             .with_quad_rays(self.mapping.grid.quad_rays())
             .with_grid_shadows(self.grid_shadowed())
+            .with_exact_shadows(self.exact_shadowed())
     }
 
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {

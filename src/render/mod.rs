@@ -16,6 +16,7 @@
 
 mod composite;
 mod cull;
+mod exact_shadows;
 mod frame;
 mod integrate;
 mod pass;
@@ -34,6 +35,7 @@ mod voxelize;
 
 pub use composite::{Composite, CompositeBindings};
 pub use cull::{Cull, CullBindings, CullCounts, CullLists};
+pub use exact_shadows::{ExactParams, ExactShadows, ExactShadowsBindings, ExactStats};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
 pub use integrate::{Integrate, IntegrateBindings, IntegrateInputs};
 pub use pass::{Pass, PassTiming};
@@ -287,6 +289,7 @@ struct Passes {
     surface: Surface,
     shadow_fit: ShadowFit,
     shadow_map: ShadowMap,
+    exact_shadows: ExactShadows,
     ranges: Ranges,
     shadow_pyramid: ShadowPyramid,
     eye_pyramid: EyePyramid,
@@ -307,6 +310,7 @@ impl Passes {
                 surface: Surface::new(d, lib)?,
                 shadow_fit: ShadowFit::new(d, lib)?,
                 shadow_map: ShadowMap::new(d, lib, shadow_map_size)?,
+                exact_shadows: ExactShadows::new(d, lib)?,
                 ranges: Ranges::new(d, lib)?,
                 shadow_pyramid: ShadowPyramid::new(d, lib, "ShadowPyramid", false)?,
                 eye_pyramid: EyePyramid::new(d, lib, "EyePyramid", true)?,
@@ -330,6 +334,7 @@ impl Passes {
             self.surface.prepare(d, variant);
             self.shadow_fit.prepare(d, variant);
             self.shadow_map.prepare(d, variant);
+            self.exact_shadows.prepare(d, variant);
             self.ranges.prepare(d, variant);
             self.cull.prepare(d, variant);
             self.voxelize.prepare(d, variant);
@@ -435,6 +440,19 @@ pub struct Renderer {
     /// (`--surface-shadows grid`). A frame with nothing to scatter has no shadow volume and uses
     /// the map either way.
     pub grid_shadows: bool,
+    /// Frames under a sun (VSV and Cartesian; the march keeps its map) light their surfaces with
+    /// the sun's shadow tested against the triangles themselves ([`ExactShadows`]) instead of
+    /// the shadow map's texels: the surfaces' shadows of the reference's shadow rays, and no map
+    /// drawn once Cull's pyramid of hidden triangles is made (a frame after the light or the
+    /// geometry changed draws one to make it). Point lights keep the cube map; so do scenes whose
+    /// triangles do not fit one storage binding ([`SceneGpu::whole_triangles`]).
+    pub exact_shadows: bool,
+    /// The list capacity [`ExactShadows`] needs, grown when a frame's triangles overflowed it (0:
+    /// none asked yet).
+    exact_capacity: u32,
+    /// The exact shadows' first list capacity in entries, instead of [`ExactShadows::first_capacity`]'s
+    /// guess: for tests of the list's growth.
+    pub exact_first_capacity: Option<u32>,
     /// Integrate every fourth pixel along the epipolar lines (the shafts run along them), then
     /// the pixels between, coarse to fine, from their two neighbours on the line where they lie
     /// on its surface and agree within 1% or lie on a straight stretch, and integrate only the
@@ -547,6 +565,9 @@ impl Renderer {
             shape_shadow_map: true,
             clear_kept_cells,
             grid_shadows: false,
+            exact_shadows: false,
+            exact_capacity: 0,
+            exact_first_capacity: None,
             adaptive_pixels: true,
             prune_plane_rays: true,
             last_fitted: false,
@@ -823,6 +844,9 @@ impl Renderer {
         let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
+        if let Some(tris) = geometry.gpu.whole_triangles() {
+            p.exact_shadows.bind(d, &self.frame_buffer, &self.shadow_uniforms, tris, &t.distance, &t.material);
+        }
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, plane_rays, &p.cull);
@@ -865,6 +889,8 @@ impl Renderer {
             distance: R::TextureView(&t.distance),
             scatter: R::TextureView(&t.scatter_view),
             hdr: R::TextureView(&t.hdr_view),
+            // (Read only by exact-shadow frames; any buffer binds in the others.)
+            exact_vis: p.exact_shadows.vis.as_ref().unwrap_or(&self.frame_buffer).as_entire_binding(),
         };
         p.composite.bind(d, composite);
         self.stale_bindings = false;
@@ -894,6 +920,18 @@ impl Renderer {
         let dims = self.map_dims(scene, method, self.fits_map(&setup), self.fit_aspect);
         if self.passes.shadow_map.set_dims(&self.ctx.device, dims) {
             self.stale_bindings = true;
+        }
+        if setup.exact_shadowed() {
+            let triangles = self.geometry.as_ref().map_or(0, |g| g.gpu.triangle_count);
+            let dims = ExactShadows::tile_dims(self.fit_aspect.unwrap_or(1.0));
+            let pixels = width as u64 * height as u64;
+            if self.exact_capacity == 0 {
+                self.exact_capacity =
+                    self.exact_first_capacity.unwrap_or_else(|| ExactShadows::first_capacity(triangles, dims));
+            }
+            if self.passes.exact_shadows.ensure(&self.ctx.device, triangles, pixels, dims, self.exact_capacity) {
+                self.stale_bindings = true;
+            }
         }
         let variant = self.frame_variant(&setup, &scene.medium.phase);
         // Every pass holds `self.variant`'s pipelines (reload and set_shadow_map_size keep it so):
@@ -1023,6 +1061,15 @@ impl Renderer {
         if self.hidden_blocks {
             setup.uniforms.image.w |= frame::FLAG_HIDDEN_BLOCKS;
         }
+        let whole = self.geometry.as_ref().is_some_and(|g| g.gpu.whole_triangles().is_some());
+        if self.exact_shadows
+            && whole
+            && !setup.frame.is_point()
+            && !setup.grid_shadowed()
+            && matches!(setup.method, Method::Vsv | Method::Cartesian)
+        {
+            setup.uniforms.image.w |= frame::FLAG_EXACT_SHADOWS;
+        }
     }
 
     /// Whether a frame of `scene` at `width x height` with `method` would take the shadow map, the
@@ -1073,7 +1120,9 @@ impl Renderer {
     ) -> Result<FrameInfo, RenderError> {
         let Prepared { setup, variant: v, key, faces, face_count } = self.prepare(scene, width, height, method)?;
         let fitted = self.fits_map(&setup);
-        let draws_map = !setup.grid_shadowed();
+        // Exact surface shadows need the map only to make Cull's pyramid of hidden triangles.
+        let exact = setup.exact_shadowed();
+        let draws_map = !setup.grid_shadowed() && (!exact || self.pyramid_to_build.is_some());
         // The passes before Integrate (or Raymarch) ran in the last frame with these inputs: their
         // results are still in the targets, the shadow map and the grid. Or only the map's inputs
         // are the same (the camera moved): the map is still in its texture.
@@ -1134,15 +1183,20 @@ impl Renderer {
             }
             f.mark(Pass::Surface);
             // The map follows the view when it is fitted: never reused across a camera move (MapKey).
+            // Exact shadows take their rectangle from the fit too.
+            if fitted && (exact || draws_map && !map_reused) {
+                p.shadow_fit.record(&mut f.enc, v, &self.shadow_uniforms, width, height);
+                self.fit_readback.record(&mut f.enc, &p.shadow_fit);
+                f.mark(Pass::ShadowFit);
+            }
             if draws_map && !map_reused {
-                if fitted {
-                    p.shadow_fit.record(&mut f.enc, v, &self.shadow_uniforms, width, height);
-                    self.fit_readback.record(&mut f.enc, &p.shadow_fit);
-                    f.mark(Pass::ShadowFit);
-                }
                 p.shadow_map.record(queue, &mut f.enc, v, scene, g, drawing);
                 p.surface.rebind_targets(&mut f.enc, &t.material, &t.distance);
                 f.mark(Pass::ShadowMap);
+            }
+            if exact {
+                p.exact_shadows.record(queue, &mut f.enc, v, width, height);
+                f.mark(Pass::ExactShadows);
             }
         }
         if fitted && (reuse || map_reused) {
@@ -1226,6 +1280,19 @@ impl Renderer {
                 .filter(|p| info.passes.contains(p) || info.reused.contains(p))
                 .collect();
             self.drawn = Some((key, drawn));
+        }
+        // A list too short for this frame's triangles left some pixels lit: the frame again, with
+        // room for them (the same inputs ask for the same entries).
+        if exact && !reuse && done.is_ok() {
+            if let Some(needed) = self.passes.exact_shadows.overflowed(&self.ctx)? {
+                let entries = needed.saturating_mul(5) / 4;
+                self.ctx.check_buffer("the exact shadows' list", entries * 4)?;
+                if entries > self.exact_capacity as u64 {
+                    self.exact_capacity = entries.min(u32::MAX as u64) as u32;
+                    self.drawn = None;
+                    return self.render_frame(scene, width, height, method);
+                }
+            }
         }
         done
     }
@@ -1384,6 +1451,11 @@ impl Renderer {
     /// Voxelize's work items per thread and words of bins per item ([`Renderer::set_voxelize_work`]).
     pub fn voxelize_work(&self) -> (u32, u32) {
         (self.passes.voxelize.items_per_thread, self.passes.voxelize.words_per_item)
+    }
+
+    /// What the last exact-shadow frame's test needed (`None` before any).
+    pub fn read_exact_stats(&self) -> Result<Option<ExactStats>, GpuError> {
+        self.passes.exact_shadows.read_stats(&self.ctx)
     }
 
     /// The shadow volume of the last frame, `planes x rays x words` words (plane-major: ray
@@ -1545,6 +1617,7 @@ mod layout_tests {
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_MATRIX_FLOATS"), ShadowPyramid::MATRIX_FLOATS);
         assert_eq!(wgsl_u32("surface_cull.wgsl", "BLOCK"), Surface::CULL_BLOCK);
+        assert_eq!(wgsl_u32("exact_shadows.wgsl", "BLOCK"), ExactShadows::BLOCK);
     }
 
     #[test]
@@ -1568,6 +1641,7 @@ mod layout_tests {
             fields!(ShadowCullUniforms: light, counts, view_proj, map_size),
             size_of::<ShadowCullUniforms>(),
         );
+        check("exact_shadows.wgsl", "ExactParams", fields!(ExactParams: tiles, eps), size_of::<ExactParams>());
         check(
             "composite.wgsl",
             "ShadowFaces",
@@ -1638,6 +1712,7 @@ mod binding_tests {
         check("integrate.wgsl", IntegrateBindings::SLOTS);
         check("raymarch.wgsl", RaymarchBindings::SLOTS);
         check("composite.wgsl", CompositeBindings::SLOTS);
+        check("exact_shadows.wgsl", ExactShadowsBindings::SLOTS);
     }
 
     /// The frame's parameters reach the passes through read-only storage buffers: on lavapipe a
@@ -1646,7 +1721,7 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 15] = [
+        let passes: [(&str, &[(&str, Kind)]); 16] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
@@ -1662,6 +1737,7 @@ mod binding_tests {
             ("integrate.wgsl", IntegrateBindings::SLOTS),
             ("raymarch.wgsl", RaymarchBindings::SLOTS),
             ("composite.wgsl", CompositeBindings::SLOTS),
+            ("exact_shadows.wgsl", ExactShadowsBindings::SLOTS),
         ];
         let uniform: Vec<String> = passes
             .iter()

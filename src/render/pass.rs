@@ -13,6 +13,8 @@ pub enum Pass {
     ShadowFit,
     /// Distance from the light to the nearest surface (cube or orthographic map).
     ShadowMap,
+    /// The sun's shadow on each visible surface point, tested against the triangles.
+    ExactShadows,
     /// The bins' z range fitted to the visible depth.
     Ranges,
     /// The triangles that can shadow a visible point, and Voxelize's work list.
@@ -37,13 +39,22 @@ pub enum Pass {
 impl Pass {
     /// The passes before the volume's integration (Integrate or Raymarch): a frame whose inputs to
     /// them did not change takes their results from the last frame (`Renderer::reuse_unchanged`).
-    pub const BEFORE_VOLUME: [Pass; 7] =
-        [Pass::Surface, Pass::ShadowFit, Pass::ShadowMap, Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan];
-    /// Every pass, in frame order.
-    pub const ALL: [Pass; 12] = [
+    pub const BEFORE_VOLUME: [Pass; 8] = [
         Pass::Surface,
         Pass::ShadowFit,
         Pass::ShadowMap,
+        Pass::ExactShadows,
+        Pass::Ranges,
+        Pass::Cull,
+        Pass::Voxelize,
+        Pass::Scan,
+    ];
+    /// Every pass, in frame order.
+    pub const ALL: [Pass; 13] = [
+        Pass::Surface,
+        Pass::ShadowFit,
+        Pass::ShadowMap,
+        Pass::ExactShadows,
         Pass::Ranges,
         Pass::Cull,
         Pass::Voxelize,
@@ -61,6 +72,7 @@ impl Pass {
             Pass::Surface => "surface",
             Pass::ShadowFit => "shadow_fit",
             Pass::ShadowMap => "shadow_map",
+            Pass::ExactShadows => "exact_shadows",
             Pass::Ranges => "ranges",
             Pass::ShadowPyramid => "shadow_pyramid",
             Pass::Cull => "cull",

@@ -2,7 +2,7 @@
 //! phase function, whether the medium is grey, the grid's axes or (Integrate) whether its rays start
 //! on four words builds one pipeline per combination a frame actually uses, with the WGSL
 //! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`,
-//! `QUAD_RAYS`, `GRID_SHADOWS` and `WHOLE_RAY_ITEMS` (`shaders/common.wgsl`) set. The shader
+//! `QUAD_RAYS`, `GRID_SHADOWS`, `WHOLE_RAY_ITEMS` and `EXACT_SHADOWS` (`shaders/common.wgsl`) set. The shader
 //! compiler then folds the branches on them away when it builds the pipeline, instead of every
 //! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
 //! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
@@ -43,6 +43,10 @@ pub struct Variant {
     /// it, and those of the passes that leave the map's work out of such a frame (Composite's
     /// lookups, Cull's test of triangles the map shows hidden).
     pub grid_shadows: bool,
+    /// The frame's surfaces take the sun's shadow from [`super::ExactShadows`] (tested against the
+    /// triangles) instead of the shadow map: only Composite's pipelines depend on it (its map
+    /// lookups compile out).
+    pub exact_shadows: bool,
     /// Each of Voxelize's items holds all of a ray's words ([`super::Voxelize::words_per_item`]
     /// at least the grid's words per ray: a CPU adapter's list). Cull then takes a point light's
     /// `psi` range from a triangle's bounding ball, which costs it one angle instead of six and no
@@ -63,6 +67,7 @@ impl Variant {
             cosine_bins: false,
             quad_rays: true,
             grid_shadows: false,
+            exact_shadows: false,
             whole_ray_items: false,
         }
     }
@@ -82,6 +87,12 @@ impl Variant {
         Variant { grid_shadows, ..self }
     }
 
+    /// The same variant for a frame whose surfaces do (or do not) take the sun's shadow from
+    /// [`super::ExactShadows`].
+    pub fn with_exact_shadows(self, exact_shadows: bool) -> Variant {
+        Variant { exact_shadows, ..self }
+    }
+
     /// The same variant for a work list whose items do (or do not) hold all of a ray's words.
     pub fn with_whole_ray_items(self, whole_ray_items: bool) -> Variant {
         Variant { whole_ray_items, ..self }
@@ -89,7 +100,7 @@ impl Variant {
 
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 8] {
+    pub fn constants(&self) -> [(&'static str, f64); 9] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("POINT_LIGHT", b(self.point_light)),
@@ -100,6 +111,7 @@ impl Variant {
             ("QUAD_RAYS", b(self.quad_rays)),
             ("GRID_SHADOWS", b(self.grid_shadows)),
             ("WHOLE_RAY_ITEMS", b(self.whole_ray_items)),
+            ("EXACT_SHADOWS", b(self.exact_shadows)),
         ]
     }
 
@@ -181,8 +193,9 @@ impl<P> VariantPipelines<P> {
         // and WHOLE_RAY_ITEMS: the others share one pipeline across grids, surface shadows and
         // work lists.
         let grid_shadows = v.grid_shadows && self.reads.reads_surface_shadows();
+        let exact_shadows = v.exact_shadows && self.reads == Specialised::LightAndSurfaceShadows;
         let whole_ray_items = v.whole_ray_items && self.reads.reads_item_layout();
-        let v = Variant { whole_ray_items, ..v };
+        let v = Variant { whole_ray_items, exact_shadows, ..v };
         let v_any_rays = Variant { quad_rays: true, grid_shadows, ..v };
         let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
@@ -202,7 +215,11 @@ impl<P> VariantPipelines<P> {
         let key = self.key(v);
         if self.get(v).is_none() {
             let light = if key.point_light { "point light" } else { "directional light" };
-            let shadows = if key.grid_shadows { ", grid shadows" } else { "" };
+            let shadows = match (key.grid_shadows, key.exact_shadows) {
+                (true, _) => ", grid shadows",
+                (false, true) => ", exact shadows",
+                (false, false) => "",
+            };
             let items = if key.whole_ray_items { ", whole-ray items" } else { "" };
             let label = match self.reads {
                 Specialised::Light | Specialised::LightAndSurfaceShadows => format!("[{light}{shadows}]"),
@@ -319,14 +336,19 @@ mod tests {
                 for (phase, (cartesian, cosine_bins)) in
                     phases.iter().flat_map(|p| [(false, false), (false, true), (true, false)].map(|g| (p, g)))
                 {
-                    for (quad_rays, grid_shadows, whole_ray_items) in
-                        [(true, false, false), (false, false, false), (true, true, false), (true, false, true)]
-                    {
+                    for (quad_rays, grid_shadows, whole_ray_items, exact_shadows) in [
+                        (true, false, false, false),
+                        (false, false, false, false),
+                        (true, true, false, false),
+                        (true, false, true, false),
+                        (true, false, false, true),
+                    ] {
                         let v = Variant::new(point_light, phase, sigma_t)
                             .with_grid(cartesian, cosine_bins)
                             .with_quad_rays(quad_rays)
                             .with_grid_shadows(grid_shadows)
-                            .with_whole_ray_items(whole_ray_items);
+                            .with_whole_ray_items(whole_ray_items)
+                            .with_exact_shadows(exact_shadows);
                         let constants: naga::back::PipelineConstants =
                             v.constants().iter().map(|(k, x)| (k.to_string(), *x)).collect();
                         for ep in &module.entry_points {
@@ -366,7 +388,7 @@ mod tests {
         assert!(common.contains("override GREY_MEDIUM"));
         assert!(common.contains("override CARTESIAN") && common.contains("override COSINE_BINS"));
         assert!(common.contains("override QUAD_RAYS") && common.contains("override GRID_SHADOWS"));
-        assert!(common.contains("override WHOLE_RAY_ITEMS"));
+        assert!(common.contains("override WHOLE_RAY_ITEMS") && common.contains("override EXACT_SHADOWS"));
     }
 
     #[test]
@@ -419,7 +441,8 @@ mod tests {
                         ("COSINE_BINS", 0.0),
                         ("QUAD_RAYS", 1.0),
                         ("GRID_SHADOWS", 0.0),
-                        ("WHOLE_RAY_ITEMS", 0.0)
+                        ("WHOLE_RAY_ITEMS", 0.0),
+                        ("EXACT_SHADOWS", 0.0)
                     ]
                 )
             });
@@ -443,8 +466,8 @@ mod tests {
     /// Whether the grid's rays start on four words changes Integrate's pipeline only; whether the
     /// surfaces' shadows come from the grid changes Integrate's and those of the passes that leave
     /// the map's work out (Composite, Cull), and neither the voxel passes' nor the map's; whether
-    /// the work list's items hold whole rays changes only the item passes' (Cull, Voxelize). None
-    /// is in the name users see.
+    /// the work list's items hold whole rays changes only the item passes' (Cull, Voxelize); whether
+    /// the sun's shadows on the surfaces are exact only Composite's. None is in the name users see.
     #[test]
     fn the_rays_alignment_grid_shadows_and_items_specialise_only_the_passes_that_read_them() {
         let sun = Variant::new(false, &Phase::Isotropic, GREY);
@@ -466,6 +489,14 @@ mod tests {
                 (0.0, 1.0),
                 ", whole-ray items",
                 vec![Specialised::LightGridAndSurfaceShadows],
+            ),
+            (
+                sun.with_exact_shadows(true),
+                8,
+                "EXACT_SHADOWS",
+                (0.0, 1.0),
+                ", exact shadows",
+                vec![Specialised::LightAndSurfaceShadows],
             ),
         ] {
             for reads in [

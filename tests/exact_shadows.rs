@@ -1,0 +1,98 @@
+//! Exact surface shadows under a sun (`Renderer::exact_shadows`, exact_shadows.wgsl): each visible
+//! surface point tested against the triangles, as the reference's shadow ray does.
+//!
+//! Tolerance: what is left between the GPU image and the reference is then the scattered light's
+//! own error and the pixels whose centre the rasterizer and the reference's view ray put on
+//! different surfaces (a silhouette within 1/256 pixel of a centre): the whole image must be
+//! closer to the reference than the shadow map's (whose filtered, biased texels blur and shift
+//! every shadow edge) by half at least, and within 1% relative RMSE on this scene of two
+//! occluders, where the map's edges are most of its error (measured: map 1.51%, exact 0.29%).
+
+mod common;
+
+use common::*;
+use epivox::params::{Grid, Light};
+use epivox::reference::{self, ReferenceOptions};
+use epivox::render::{Method, Pass, Renderer};
+use epivox::scene::Scene;
+use epivox::{metrics, Image};
+use glam::Vec3;
+
+fn sun_scene() -> Scene {
+    let mut s = occluder_scene(Light::Directional {
+        direction: Vec3::new(0.45, 1.0, 0.3).normalize(),
+        irradiance: Vec3::splat(3.0),
+    });
+    // A box standing on the floor as well: a contact shadow, where a map's bias shows most.
+    s.meshes.push(cube("box", Vec3::new(-1.2, 0.3, 0.6), Vec3::splat(0.3)));
+    s.grid = Grid { planes: 256, rays: 256, bins: 64, ..Grid::default() };
+    s
+}
+
+fn whole_image(r: &mut Renderer, scene: &Scene, exact: bool, size: u32) -> (Image, Vec<Pass>) {
+    r.exact_shadows = exact;
+    let out = r.render(scene, size, size, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    (out.hdr, out.passes)
+}
+
+#[test]
+fn exact_surface_shadows_are_the_references() {
+    let Some(mut r) = renderer() else { return };
+    let scene = sun_scene();
+    let size = 96;
+    let reference = reference::render(&scene, size, size, &ReferenceOptions { progress: false, ..Default::default() });
+    let (map, map_passes) = whole_image(&mut r, &scene, false, size);
+    let (exact, exact_passes) = whole_image(&mut r, &scene, true, size);
+    let map_err = metrics::compare(&map, &reference.hdr).unwrap().rel_rmse;
+    let exact_err = metrics::compare(&exact, &reference.hdr).unwrap().rel_rmse;
+    eprintln!("whole image against the reference: map {map_err:.4}, exact {exact_err:.4}");
+    dump("exact_shadows_map", &map);
+    dump("exact_shadows_exact", &exact);
+    dump("exact_shadows_ref", &reference.hdr);
+    assert!(map_passes.contains(&Pass::ShadowMap) && !map_passes.contains(&Pass::ExactShadows));
+    assert!(exact_passes.contains(&Pass::ExactShadows));
+    assert!(exact_err < 0.01, "exact shadows {exact_err:.4} off the reference");
+    assert!(exact_err < 0.5 * map_err, "exact shadows {exact_err:.4} not clearly better than the map's {map_err:.4}");
+}
+
+/// A frame after the first one draws no map: Cull's pyramid of hidden triangles is made, and the
+/// surfaces need none. The image stays the same.
+#[test]
+fn a_second_frame_draws_no_shadow_map() {
+    let Some(mut r) = renderer() else { return };
+    r.reuse_unchanged = false;
+    let scene = sun_scene();
+    let (first, passes) = whole_image(&mut r, &scene, true, 64);
+    assert!(passes.contains(&Pass::ShadowMap), "the first frame makes the pyramid from a map: {passes:?}");
+    let (second, passes) = whole_image(&mut r, &scene, true, 64);
+    assert!(!passes.contains(&Pass::ShadowMap), "{passes:?}");
+    assert_eq!(first.pixels, second.pixels);
+}
+
+/// A list too short for the frame's triangles grows, and the frame is rendered again with it:
+/// the same image as with room from the start.
+#[test]
+fn a_short_list_grows_to_the_same_image() {
+    let Some(mut r) = renderer() else { return };
+    let scene = sun_scene();
+    let (roomy, _) = whole_image(&mut r, &scene, true, 64);
+    let Some(mut short) = renderer() else { return };
+    short.exact_first_capacity = Some(8);
+    let (grown, _) = whole_image(&mut short, &scene, true, 64);
+    let stats = short.read_exact_stats().unwrap().unwrap();
+    assert_eq!(stats.overflow, 0, "{stats:?}");
+    assert!(stats.entries > 8, "the scene should need more than 8 entries: {stats:?}");
+    assert_eq!(roomy.pixels, grown.pixels);
+}
+
+/// A point light keeps the cube map: the option changes nothing there.
+#[test]
+fn point_lights_keep_the_map() {
+    let Some(mut r) = renderer() else { return };
+    let mut scene = sun_scene();
+    scene.light = point_light(Vec3::new(0.3, 3.0, 0.2));
+    let (map, _) = whole_image(&mut r, &scene, false, 48);
+    let (exact, passes) = whole_image(&mut r, &scene, true, 48);
+    assert!(!passes.contains(&Pass::ExactShadows));
+    assert_eq!(map.pixels, exact.pixels);
+}
