@@ -223,6 +223,39 @@ fn edge(a: vec2f, b: vec2f) -> vec3f {
     return vec3f(n, -dot(n, a));
 }
 
+// The tiles of triangle t's box (first x, first y, last x, last y) it may darken or list
+// (`tile_role`), whole blocks of them passed over where `block_wanted` says none: `count` adds one
+// to a listing tile's entries and marks a darkened one, `fill` writes t into a listing tile's list.
+fn visit_tiles(t: u32, e0: vec4f, e1: vec4f, e2: vec4f, box: vec4f, filling: bool) {
+    let w = params.tiles.x;
+    let nb = blocks();
+    let b_lo = vec2u(box.xy) / BLOCK;
+    let b_hi = vec2u(box.zw) / BLOCK;
+    for (var by = b_lo.y; by <= b_hi.y; by++) {
+        for (var bx = b_lo.x; bx <= b_hi.x; bx++) {
+            let t_lo = max(vec2f(vec2u(bx, by) * BLOCK), box.xy);
+            let t_hi = min(vec2f(vec2u(bx, by) * BLOCK + BLOCK - 1u), box.zw);
+            if (!block_wanted(e0, e1, e2, by * nb.x + bx, t_lo, t_hi + 1.0)) { continue; }
+            for (var y = t_lo.y; y <= t_hi.y; y += 1.0) {
+                for (var x = t_lo.x; x <= t_hi.x; x += 1.0) {
+                    let role = tile_role(e0, e1, e2, x, y);
+                    let tile = u32(y) * w + u32(x);
+                    if (filling) {
+                        if (role == 1u) {
+                            let at = atomicAdd(&tiles[cursors_at() + tile], 1u);
+                            if (at < params.tiles.w) { list[at] = t; }
+                        }
+                    } else if (role == 1u) {
+                        atomicAdd(&tiles[tile], 1u);
+                    } else if (role == 2u) {
+                        atomicStore(&tiles[dark_at() + tile], 1u);
+                    }
+                }
+            }
+        }
+    }
+}
+
 @compute @workgroup_size(64)
 fn count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     copy_parameters();
@@ -258,27 +291,7 @@ fn count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) grou
     planes[4u * t + 1u] = e1;
     planes[4u * t + 2u] = e2;
     planes[4u * t + 3u] = vec4f(lo, hi);
-    let w = params.tiles.x;
-    let nb = blocks();
-    let b_lo = vec2u(lo) / BLOCK;
-    let b_hi = vec2u(hi) / BLOCK;
-    for (var by = b_lo.y; by <= b_hi.y; by++) {
-        for (var bx = b_lo.x; bx <= b_hi.x; bx++) {
-            let t_lo = max(vec2f(vec2u(bx, by) * BLOCK), lo);
-            let t_hi = min(vec2f(vec2u(bx, by) * BLOCK + BLOCK - 1u), hi);
-            if (!block_wanted(e0, e1, e2, by * nb.x + bx, t_lo, t_hi + 1.0)) { continue; }
-            for (var y = t_lo.y; y <= t_hi.y; y += 1.0) {
-                for (var x = t_lo.x; x <= t_hi.x; x += 1.0) {
-                    let role = tile_role(e0, e1, e2, x, y);
-                    if (role == 1u) {
-                        atomicAdd(&tiles[u32(y) * w + u32(x)], 1u);
-                    } else if (role == 2u) {
-                        atomicStore(&tiles[dark_at() + u32(y) * w + u32(x)], 1u);
-                    }
-                }
-            }
-        }
-    }
+    visit_tiles(t, e0, e1, e2, vec4f(lo, hi), false);
 }
 
 // One workgroup: tiles[0, T] become each tile's first entry (tiles[T] the total), and the cursors
@@ -316,26 +329,7 @@ fn fill(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) group
     let e0 = planes[4u * t];
     let e1 = planes[4u * t + 1u];
     let e2 = planes[4u * t + 2u];
-    let w = params.tiles.x;
-    let cursors = cursors_at();
-    let nb = blocks();
-    let b_lo = vec2u(box.xy) / BLOCK;
-    let b_hi = vec2u(box.zw) / BLOCK;
-    for (var by = b_lo.y; by <= b_hi.y; by++) {
-        for (var bx = b_lo.x; bx <= b_hi.x; bx++) {
-            let t_lo = max(vec2f(vec2u(bx, by) * BLOCK), box.xy);
-            let t_hi = min(vec2f(vec2u(bx, by) * BLOCK + BLOCK - 1u), box.zw);
-            if (!block_wanted(e0, e1, e2, by * nb.x + bx, t_lo, t_hi + 1.0)) { continue; }
-            for (var y = t_lo.y; y <= t_hi.y; y += 1.0) {
-                for (var x = t_lo.x; x <= t_hi.x; x += 1.0) {
-                    if (tile_role(e0, e1, e2, x, y) == 1u) {
-                        let at = atomicAdd(&tiles[cursors + u32(y) * w + u32(x)], 1u);
-                        if (at < params.tiles.w) { list[at] = t; }
-                    }
-                }
-            }
-        }
-    }
+    visit_tiles(t, e0, e1, e2, box, true);
 }
 
 @compute @workgroup_size(8, 8)
