@@ -743,18 +743,17 @@ fn broken_shaders_at_start_fall_back_to_the_embedded_ones() {
     assert!(wait_for(&mut h, Duration::from_secs(60), |e| e.shader_error().is_none()));
 }
 
-/// The toolbar's "shadows from grid" (VSV's surface shadows from the shadow volume): a click
+/// The toolbar's "shadows: grid" (VSV's surface shadows from the shadow volume): a pick
 /// renders again without a shadow map, and the picture stays the same but for the shadows' edges.
 #[test]
-fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
+fn surface_shadows_from_the_grid_are_one_pick_and_draw_no_shadow_map() {
     use epivox::render::Pass;
     let dir = tempfile::tempdir().unwrap();
     let Some(mut h) = harness(options(dir.path())) else { return };
     let (before, ..) = viewport_pixels(&mut h);
     let shown = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.passes.clone();
     assert!(shown(&h).contains(&Pass::ShadowMap), "the default frame drew no shadow map");
-    h.get_by_label("shadows from grid").click();
-    h.run();
+    pick_surface_shadows(&mut h, "grid");
     assert!(h.state().ed().grid_shadows(), "the click did not reach the view");
     // The map's size no longer applies: its picker is disabled.
     let picker = |h: &Harness<'static, App>| h.get_by_label("shadow map").accesskit_node().is_disabled();
@@ -771,6 +770,42 @@ fn surface_shadows_from_the_grid_are_one_click_and_draw_no_shadow_map() {
     h.state_mut().ed_mut().apply(Command::SetMethod(epivox::render::Method::Raymarch { steps: 64, jitter: true }));
     h.run();
     assert!(!picker(&h), "the shadow-map size is disabled for the baseline");
+}
+
+/// The toolbar's "shadows: exact" (`Renderer::exact_shadows`): under a sun, a pick
+/// renders again with the surfaces' shadows tested against the triangles; picking the grid's
+/// instead turns them off.
+#[test]
+fn exact_sun_shadows_are_one_pick() {
+    use epivox::render::Pass;
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let sun = epivox::params::Light::Directional {
+        direction: glam::Vec3::new(0.4, 1.0, 0.3).normalize(),
+        irradiance: glam::Vec3::splat(3.0),
+    };
+    h.state_mut().ed_mut().apply(Command::SetLight(sun, None));
+    let (before, ..) = viewport_pixels(&mut h);
+    let shown = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.passes.clone();
+    assert!(!shown(&h).contains(&Pass::ExactShadows), "exact shadows are on by default");
+    pick_surface_shadows(&mut h, "exact");
+    assert!(h.state().ed().exact_shadows(), "the click did not reach the view");
+    let (after, ..) = viewport_pixels(&mut h);
+    assert!(shown(&h).contains(&Pass::ExactShadows), "the frame after the click: {:?}", shown(&h));
+    // The shadows' edges move by a texel or so; the lit surfaces and the shafts stay.
+    let diff = mean_diff(&before, &after);
+    assert!(diff < 10.0, "the picture changed by {diff:.2} of 255");
+    // One choice of three: the grid's shadows replace the exact ones.
+    pick_surface_shadows(&mut h, "grid");
+    assert!(h.state().ed().grid_shadows() && !h.state().ed().exact_shadows());
+}
+
+/// Opens the toolbar's "shadows" (the surfaces') and picks `item`.
+fn pick_surface_shadows(h: &mut Harness<'static, App>, item: &str) {
+    h.get_by_label("shadows").click();
+    h.run();
+    h.get_by_label(item).click();
+    h.run();
 }
 
 /// The toolbar's "adaptive pixels" (`Renderer::adaptive_pixels`, on by default): a click renders

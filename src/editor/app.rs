@@ -362,6 +362,11 @@ impl Editor {
         self.view.grid_shadows
     }
 
+    /// Whether the surfaces' sun shadows are tested against the triangles (`Renderer::exact_shadows`).
+    pub fn exact_shadows(&self) -> bool {
+        self.view.exact_shadows
+    }
+
     /// Whether Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
     pub fn adaptive_pixels(&self) -> bool {
         self.view.adaptive_pixels

@@ -73,6 +73,7 @@ impl Editor {
                 }
             }
             Command::SetGridShadows(on) => view.grid_shadows = on,
+            Command::SetExactShadows(on) => view.exact_shadows = on,
             Command::SetAdaptivePixels(on) => view.adaptive_pixels = on,
             Command::SetRenderScale(s) => view.render_scale = s.clamp(0.1, 1.0),
             Command::SetCameraMode(m) => view.camera.mode = m,
@@ -161,6 +162,7 @@ impl Editor {
             method: view.method,
             shadow_map: view.shadow_map,
             grid_shadows: view.grid_shadows,
+            exact_shadows: view.exact_shadows,
             adaptive_pixels: view.adaptive_pixels,
             width,
             height,
@@ -191,6 +193,7 @@ impl Editor {
             method: content.method,
             shadow_map: content.shadow_map,
             grid_shadows: content.grid_shadows,
+            exact_shadows: content.exact_shadows,
             adaptive_pixels: content.adaptive_pixels,
             interactive,
             progressive: !forcing,

@@ -46,6 +46,9 @@ pub enum Command {
     SetShadowMap(u32),
     /// VSV's surface shadows from the shadow volume (true) or the shadow map.
     SetGridShadows(bool),
+    /// VSV's and the Cartesian grid's surface shadows under a sun tested against the triangles
+    /// (`Renderer::exact_shadows`; a point light keeps the map).
+    SetExactShadows(bool),
     /// Integrate takes pixels from their neighbours along the epipolar lines (true) or integrates
     /// every pixel (`Renderer::adaptive_pixels`).
     SetAdaptivePixels(bool),

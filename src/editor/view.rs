@@ -109,6 +109,9 @@ pub struct View {
     /// VSV's surface shadows from the shadow volume, with no shadow map drawn
     /// (`Renderer::grid_shadows`).
     pub grid_shadows: bool,
+    /// Under a sun, the surfaces' shadows tested against the triangles
+    /// (`Renderer::exact_shadows`; the grid's take precedence where both are on).
+    pub exact_shadows: bool,
     /// Integrate takes pixels from their neighbours along the epipolar lines, or integrates every
     /// pixel (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
@@ -130,6 +133,7 @@ impl Default for View {
             raymarch_steps: Baseline::default().steps,
             shadow_map: Baseline::default().shadow_map,
             grid_shadows: false,
+            exact_shadows: false,
             adaptive_pixels: true,
             render_scale: 1.0,
             camera: CameraController::default(),

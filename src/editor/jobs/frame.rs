@@ -32,6 +32,8 @@ pub struct FrameRequest {
     pub shadow_map: u32,
     /// VSV's surface shadows from the shadow volume (`Renderer::grid_shadows`).
     pub grid_shadows: bool,
+    /// Under a sun, the surfaces' shadows tested against the triangles (`Renderer::exact_shadows`).
+    pub exact_shadows: bool,
     /// Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
     /// The user is dragging or scrolling: previews only; the full frame when this turns false.

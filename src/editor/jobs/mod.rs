@@ -102,6 +102,7 @@ pub struct RenderContent {
     pub method: Method,
     pub shadow_map: u32,
     pub grid_shadows: bool,
+    pub exact_shadows: bool,
     pub adaptive_pixels: bool,
     pub width: u32,
     pub height: u32,

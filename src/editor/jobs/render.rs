@@ -550,7 +550,8 @@ impl Worker {
             && full.scene_generation == Some(r.scene_generation)
             && full.keep_geometry == keeps_grids(r, Quality::Full)
             && full.renderer.shadow_map_size() == r.shadow_map
-            && full.renderer.grid_shadows == r.grid_shadows;
+            && full.renderer.grid_shadows == r.grid_shadows
+            && full.renderer.exact_shadows == r.exact_shadows;
         if !fits || !same_lane || *generation != r.scene_generation {
             return false;
         }
@@ -599,6 +600,7 @@ impl Worker {
             return fail(self, e.to_string());
         }
         lane.renderer.grid_shadows = r.grid_shadows;
+        lane.renderer.exact_shadows = r.exact_shadows;
         lane.renderer.adaptive_pixels = r.adaptive_pixels;
         let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,

@@ -142,14 +142,35 @@ impl Toolbar {
         if size != view.shadow_map {
             out.push(Command::SetShadowMap(size));
         }
-        if view.method == Method::Vsv {
-            let mut on = view.grid_shadows;
-            let r = ui.checkbox(&mut on, "shadows from grid").on_hover_text(
-                "VSV's surface shadows from the shadow volume itself: no shadow map is drawn (faster on a \
-                 GPU), and the shadows are as sharp as the grid's bins",
-            );
-            if r.changed() {
-                out.push(Command::SetGridShadows(on));
+        if matches!(view.method, Method::Vsv | Method::Cartesian) {
+            // Where the surfaces' shadows come from: one choice of three (grid shadows are VSV's).
+            let vsv = view.method == Method::Vsv;
+            let now = match (vsv && view.grid_shadows, view.exact_shadows) {
+                (true, _) => SurfaceShadows::Grid,
+                (false, true) => SurfaceShadows::Exact,
+                (false, false) => SurfaceShadows::Map,
+            };
+            let mut pick = now;
+            egui::ComboBox::new("surface-shadows", "shadows")
+                // (Narrow: the row is fixed, and "adaptive pixels" must stay on it at 1200 px.)
+                .width(52.0)
+                .selected_text(pick.label())
+                .show_ui(ui, |ui| {
+                    for kind in SurfaceShadows::ALL {
+                        if kind != SurfaceShadows::Grid || vsv {
+                            ui.selectable_value(&mut pick, kind, kind.label()).on_hover_text(kind.doc());
+                        }
+                    }
+                })
+                .response
+                .on_hover_text(pick.doc());
+            if pick != now {
+                if vsv && (pick == SurfaceShadows::Grid) != view.grid_shadows {
+                    out.push(Command::SetGridShadows(pick == SurfaceShadows::Grid));
+                }
+                if (pick == SurfaceShadows::Exact) != view.exact_shadows {
+                    out.push(Command::SetExactShadows(pick == SurfaceShadows::Exact));
+                }
             }
         }
         if matches!(view.method, Method::Vsv | Method::Cartesian) {
@@ -207,6 +228,42 @@ impl Toolbar {
         );
         if r.changed() {
             out.push(Command::SetScatterExposure(e));
+        }
+    }
+}
+
+/// The toolbar's choice of where the surfaces' shadows come from (`Renderer::grid_shadows`,
+/// `Renderer::exact_shadows`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum SurfaceShadows {
+    Map,
+    Grid,
+    Exact,
+}
+
+impl SurfaceShadows {
+    const ALL: [SurfaceShadows; 3] = [SurfaceShadows::Map, SurfaceShadows::Grid, SurfaceShadows::Exact];
+
+    fn label(self) -> &'static str {
+        match self {
+            SurfaceShadows::Map => "map",
+            SurfaceShadows::Grid => "grid",
+            SurfaceShadows::Exact => "exact",
+        }
+    }
+
+    fn doc(self) -> &'static str {
+        match self {
+            SurfaceShadows::Map => "The surfaces' shadows from the shadow map's filtered texels, like the ray-marching baseline's",
+            SurfaceShadows::Grid => {
+                "The surfaces' shadows from VSV's shadow volume itself: no shadow map is drawn (faster on a GPU), and the shadows are as \
+                 sharp as the grid's bins"
+            }
+            SurfaceShadows::Exact => {
+                "The surfaces' shadows under a sun: each surface point tested against the triangles themselves: the reference's \
+                 shadows, and no shadow map after the first frame (slower than the map on a CPU adapter). A \
+                 point light keeps the map"
+            }
         }
     }
 }
