@@ -7,14 +7,15 @@
 //! into tiles, each triangle is listed in the tiles its projection overlaps, and each pixel tests
 //! its point against its tile's triangles. The surfaces' shadows are then those of the reference's
 //! shadow rays (src/reference), with no texels, filtering or bias: the classroom's whole image at
-//! 512x512 goes from 45% relative RMSE against the reference with the map to the scattered light's
-//! own error (docs/results.md, session 44). And a frame needs no shadow map at all once the sun's
+//! 512x512 goes from 45% relative RMSE against the reference with the map to 21%, the rest being
+//! pixels whose centre the rasterizer and the reference's ray put on different surfaces
+//! (docs/results.md, session 44). And a frame needs no shadow map at all once the sun's
 //! pyramid of hidden triangles is made (Cull's test; `Renderer::render_frame` draws the map only
 //! to make it). Directional lights only: a point light's surfaces keep the cube map.
 //!
 //! The list's capacity is a guess that grows: a frame whose triangles need more entries leaves the
-//! pixels of the tiles past it lit, and reports it ([`ExactShadows::overflowed`]); the renderer
-//! grows the list for the next frame, and `Renderer::render` renders such a frame again.
+//! pixels of the tiles past it lit, and reports it ([`ExactShadows::overflowed`]);
+//! `Renderer::render_frame` then grows the list and renders the frame again.
 
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
@@ -50,8 +51,9 @@ pub struct ExactParams {
 
 /// The test's tolerances (exact_shadows.wgsl). The depth offset is along the light, the point's
 /// own triangle being a few f32 steps of its view distance away (the distance texture is f32):
-/// 4e-6 of it is several times that, divided by `cos theta_i` (an offset along the light clears
-/// the plane by that times the cosine), with a floor for points next to the eye.
+/// 2e-5 of it, divided by `cos theta_i` (an offset along the light clears the plane by that times
+/// the cosine), with a floor for points next to the eye. On the classroom 4e-6 left acne and 4e-4
+/// let light in at contacts; 1.5e-5 to 4e-5 gave the same error (docs/tried.md, session 44).
 const EPS_FLOOR: f32 = 1e-5;
 const EPS_PER_DISTANCE: f32 = 2e-5;
 const MIN_COS: f32 = 0.02;
@@ -269,7 +271,7 @@ impl ExactShadows {
         self.bind_group = Some(b.bind(device, "ExactShadows::bind_group", &self.layout));
     }
 
-    /// Records the four dispatches for a `width x height` image (after Surface and ShadowFit).
+    /// Records the six dispatches for a `width x height` image (after Surface and ShadowFit).
     pub fn record(
         &self,
         queue: &wgpu::Queue,
