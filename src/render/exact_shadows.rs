@@ -7,8 +7,8 @@
 //! into tiles, each triangle is listed in the tiles its projection overlaps, and each pixel tests
 //! its point against its tile's triangles. The surfaces' shadows are then those of the reference's
 //! shadow rays (src/reference), with no texels, filtering or bias: the classroom's whole image at
-//! 512x512 goes from 45% relative RMSE against the reference with the map to 21%, the rest being
-//! pixels whose centre the rasterizer and the reference's ray put on different surfaces
+//! 512x512 goes from 45% relative RMSE against the reference with the map to 21%, the rest in
+//! isolated pixels, many of them silhouettes the rasterizer and the reference's ray see apart
 //! (docs/results.md, session 44). And a frame needs no shadow map at all once the sun's
 //! pyramid of hidden triangles is made (Cull's test; `Renderer::render_frame` draws the map only
 //! to make it). Directional lights only: a point light's surfaces keep the cube map.
