@@ -29,7 +29,7 @@ use crate::metrics::{self, ErrorStats, MetricsError};
 use crate::params::Grid;
 use crate::reference::ReferenceOptions;
 use crate::render::{FrameSetup, Method, Renderer};
-use crate::render::{Pass, RenderError};
+use crate::render::{Pass, RenderError, SurfaceShadows};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -799,17 +799,20 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     } else {
         "Scan: a thread per column (scan.wgsl, scan_words.wgsl; `--scan threads`, a CPU adapter's default)".into()
     });
-    notes.push(if renderer.grid_shadows {
-        "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw no shadow map, \
-         and `final` shows what that does to the surfaces"
-            .into()
-    } else if renderer.exact_shadows {
-        "VSV's surface shadows under a sun: each surface point tested against the triangles (`--surface-shadows \
-         exact`, `exact_shadows` in the table, counted in its volume time): its frames after the first draw no \
-         shadow map (a point light's keep the cube map)"
-            .into()
-    } else {
-        "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)".into()
+    notes.push(match renderer.surface_shadows() {
+        SurfaceShadows::Grid => {
+            "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw \
+             no shadow map, and `final` shows what that does to the surfaces"
+                .into()
+        }
+        SurfaceShadows::Exact => "VSV's surface shadows under a sun: each surface point tested against the triangles \
+             (`--surface-shadows exact`, `exact_shadows` in the table, counted in its volume time): its frames after \
+             the first draw no shadow map (a point light's keep the cube map)"
+            .into(),
+        SurfaceShadows::Map => {
+            "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)"
+                .into()
+        }
     });
     notes.push(if renderer.adaptive_pixels {
         "VSV's Integrate: every fourth pixel along the epipolar lines, then the others where their neighbours \

@@ -84,20 +84,8 @@ pub enum ScanBy {
     Columns,
 }
 
-/// Where a VSV frame's surface shadows come from (`Renderer::grid_shadows`,
-/// `Renderer::exact_shadows`).
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
-pub enum SurfaceShadows {
-    /// The shadow volume itself (integrate.wgsl, "surface shadows"): no shadow map is drawn, and
-    /// the shadows are as sharp as the grid's bins.
-    Grid,
-    /// The shadow map, like the baseline's surfaces.
-    Map,
-    /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
-    /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
-    /// lights use the map.
-    Exact,
-}
+/// Where a VSV frame's surface shadows come from: the library's list.
+pub use epivox::render::SurfaceShadows;
 
 /// Which pixels VSV's Integrate integrates (`Renderer::adaptive_pixels`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
@@ -149,8 +137,7 @@ impl PassChoices {
             renderer.scan_columns = by == ScanBy::Columns;
         }
         if let Some(from) = self.surface_shadows {
-            renderer.grid_shadows = from == SurfaceShadows::Grid;
-            renderer.exact_shadows = from == SurfaceShadows::Exact;
+            renderer.set_surface_shadows(from);
         }
         if let Some(pixels) = self.pixels {
             renderer.adaptive_pixels = pixels == Pixels::Adaptive;

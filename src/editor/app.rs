@@ -21,7 +21,7 @@ use super::session::{Message, Session};
 use super::view::{View, ViewMode};
 use super::{camera::CameraMode, Command, EditorError, EditorOptions, RunSummary};
 use crate::gpu::{GpuContext, ShaderLibrary};
-use crate::render::Method;
+use crate::render::{Method, SurfaceShadows};
 use crate::scene::Scene;
 use eframe::egui;
 use eframe::egui_wgpu;
@@ -359,12 +359,12 @@ impl Editor {
     }
     /// Whether VSV's surface shadows come from the shadow volume (`Renderer::grid_shadows`).
     pub fn grid_shadows(&self) -> bool {
-        self.view.grid_shadows
+        self.view.surface_shadows == SurfaceShadows::Grid
     }
 
     /// Whether the surfaces' sun shadows are tested against the triangles (`Renderer::exact_shadows`).
     pub fn exact_shadows(&self) -> bool {
-        self.view.exact_shadows
+        self.view.surface_shadows == SurfaceShadows::Exact
     }
 
     /// Whether Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).

@@ -72,8 +72,7 @@ impl Editor {
                     view.shadow_map = s;
                 }
             }
-            Command::SetGridShadows(on) => view.grid_shadows = on,
-            Command::SetExactShadows(on) => view.exact_shadows = on,
+            Command::SetSurfaceShadows(from) => view.surface_shadows = from,
             Command::SetAdaptivePixels(on) => view.adaptive_pixels = on,
             Command::SetRenderScale(s) => view.render_scale = s.clamp(0.1, 1.0),
             Command::SetCameraMode(m) => view.camera.mode = m,
@@ -161,8 +160,7 @@ impl Editor {
             surface_only: view.mode == ViewMode::Surface,
             method: view.method,
             shadow_map: view.shadow_map,
-            grid_shadows: view.grid_shadows,
-            exact_shadows: view.exact_shadows,
+            surface_shadows: view.surface_shadows,
             adaptive_pixels: view.adaptive_pixels,
             width,
             height,
@@ -192,8 +190,7 @@ impl Editor {
             height,
             method: content.method,
             shadow_map: content.shadow_map,
-            grid_shadows: content.grid_shadows,
-            exact_shadows: content.exact_shadows,
+            surface_shadows: content.surface_shadows,
             adaptive_pixels: content.adaptive_pixels,
             interactive,
             progressive: !forcing,

@@ -6,7 +6,7 @@ use super::jobs::JobEvent;
 use super::panels::inspector::InspectorMode;
 use super::view::{ExposureMode, ViewMode};
 use crate::params::{Grid, Light, Medium};
-use crate::render::Method;
+use crate::render::{Method, SurfaceShadows};
 use crate::scene::Camera;
 use eframe::egui;
 use std::path::PathBuf;
@@ -44,11 +44,8 @@ pub enum Command {
     SetMethod(Method),
     /// Shadow-map texels per side (surface shadows, and the ray-marching baseline's visibility).
     SetShadowMap(u32),
-    /// VSV's surface shadows from the shadow volume (true) or the shadow map.
-    SetGridShadows(bool),
-    /// VSV's and the Cartesian grid's surface shadows under a sun tested against the triangles
-    /// (`Renderer::exact_shadows`; a point light keeps the map).
-    SetExactShadows(bool),
+    /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
+    SetSurfaceShadows(SurfaceShadows),
     /// Integrate takes pixels from their neighbours along the epipolar lines (true) or integrates
     /// every pixel (`Renderer::adaptive_pixels`).
     SetAdaptivePixels(bool),

@@ -4,7 +4,7 @@
 
 use super::camera::CameraController;
 use crate::params::Baseline;
-use crate::render::Method;
+use crate::render::{Method, SurfaceShadows};
 use eframe::egui;
 
 /// What the viewport shows.
@@ -106,12 +106,8 @@ pub struct View {
     pub raymarch_steps: u32,
     /// Shadow-map texels per side (surface shadows, and the baseline's visibility).
     pub shadow_map: u32,
-    /// VSV's surface shadows from the shadow volume, with no shadow map drawn
-    /// (`Renderer::grid_shadows`).
-    pub grid_shadows: bool,
-    /// Under a sun, the surfaces' shadows tested against the triangles
-    /// (`Renderer::exact_shadows`; the grid's take precedence where both are on).
-    pub exact_shadows: bool,
+    /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
+    pub surface_shadows: SurfaceShadows,
     /// Integrate takes pixels from their neighbours along the epipolar lines, or integrates every
     /// pixel (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
@@ -132,8 +128,7 @@ impl Default for View {
             method: Method::Vsv,
             raymarch_steps: Baseline::default().steps,
             shadow_map: Baseline::default().shadow_map,
-            grid_shadows: false,
-            exact_shadows: false,
+            surface_shadows: SurfaceShadows::default(),
             adaptive_pixels: true,
             render_scale: 1.0,
             camera: CameraController::default(),

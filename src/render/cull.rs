@@ -215,8 +215,7 @@ impl Cull {
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_pipeline(cull);
         // Two dimensions past 65535 workgroups (4M threads).
-        let groups = triangles.div_ceil(64 * per_thread.max(1)).max(1);
-        let (gx, gy) = if groups > 65535 { (65535, groups.div_ceil(65535)) } else { (groups, 1) };
+        let (gx, gy) = super::util::split_groups(triangles.div_ceil(64 * per_thread.max(1)));
         pass.dispatch_workgroups(gx, gy, 1);
         pass.set_pipeline(finish);
         pass.dispatch_workgroups(1, 1, 1);

@@ -214,31 +214,20 @@ impl ExactShadows {
         triangles.saturating_mul(Self::ENTRIES_PER_TRIANGLE).max((w * h).saturating_mul(Self::ENTRIES_PER_TILE))
     }
 
-    /// The list's capacity in entries.
-    pub fn capacity(&self) -> u32 {
-        self.capacity
-    }
-
-    /// Tiles across and down in the last frame.
-    pub fn tiles(&self) -> (u32, u32) {
-        self.tile_dims
-    }
-
     /// What the last frame left in the tiles' buffer.
     pub fn read_stats(&self, ctx: &crate::gpu::GpuContext) -> Result<Option<ExactStats>, GpuError> {
         let Some(tiles) = &self.tiles else { return Ok(None) };
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.read_buffer(tiles)?);
         let n = (self.tile_dims.0 * self.tile_dims.1) as usize;
         let at = |i: usize| words.get(i).copied().unwrap_or(0);
-        let count = |from: usize, test: &dyn Fn(u32) -> bool| {
-            words[from.min(words.len())..(from + n).min(words.len())].iter().filter(|w| test(**w)).count()
-        };
+        // The non-zero words of the stretch of n from `from`.
+        let nonzero = |from: usize| (from..from + n).filter(|&i| at(i) != 0).count();
         Ok(Some(ExactStats {
             entries: at(n) as u64 + at(2 * n + 1) as u64,
             overflow: at(2 * n + 1),
             tiles: n,
-            tiles_with_points: count(2 * n + 2, &|w| w != 0),
-            dark_tiles: count(4 * n + 2, &|w| w != 0),
+            tiles_with_points: nonzero(2 * n + 2),
+            dark_tiles: nonzero(4 * n + 2),
         }))
     }
 
@@ -294,8 +283,7 @@ impl ExactShadows {
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(tiles, 0, Some(Self::tile_words((w, h)) * 4));
         // (Two dimensions past 65535 workgroups: exact_shadows.wgsl's `thread_index`.)
-        let groups = self.triangles.div_ceil(64).max(1);
-        let per_triangle = if groups > 65535 { (65535, groups.div_ceil(65535)) } else { (groups, 1) };
+        let per_triangle = super::util::split_groups(self.triangles.div_ceil(64));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("ExactShadows::pass"),
             timestamp_writes: None,

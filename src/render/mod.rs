@@ -256,6 +256,54 @@ struct MapKey {
     switches: [bool; 4],
 }
 
+/// Where a frame's surface shadows come from ([`Renderer::surface_shadows`]): the CLI's
+/// `--surface-shadows`, the editor's toolbar and the renderer's switches read this one list.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default, clap::ValueEnum)]
+pub enum SurfaceShadows {
+    /// The shadow volume itself (integrate.wgsl, "surface shadows"; VSV only): no shadow map is
+    /// drawn, and the shadows are as sharp as the grid's bins.
+    Grid,
+    /// The shadow map, like the baseline's surfaces: the default.
+    #[default]
+    Map,
+    /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
+    /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
+    /// lights use the map.
+    Exact,
+}
+
+impl SurfaceShadows {
+    /// In the order a menu offers them.
+    pub const ALL: [SurfaceShadows; 3] = [SurfaceShadows::Map, SurfaceShadows::Grid, SurfaceShadows::Exact];
+
+    /// The short name (the CLI's value, the toolbar's item).
+    pub fn label(self) -> &'static str {
+        match self {
+            SurfaceShadows::Map => "map",
+            SurfaceShadows::Grid => "grid",
+            SurfaceShadows::Exact => "exact",
+        }
+    }
+
+    /// What it means, for a tooltip.
+    pub fn doc(self) -> &'static str {
+        match self {
+            SurfaceShadows::Map => {
+                "The surfaces' shadows from the shadow map's filtered texels, like the ray-marching baseline's"
+            }
+            SurfaceShadows::Grid => {
+                "The surfaces' shadows from VSV's shadow volume itself: no shadow map is drawn (faster on a GPU), and \
+                 the shadows are as sharp as the grid's bins"
+            }
+            SurfaceShadows::Exact => {
+                "The surfaces' shadows under a sun: each surface point tested against the triangles themselves: the \
+                 reference's shadows, and no shadow map after the first frame (slower than the map on a CPU \
+                 adapter). A point light keeps the map"
+            }
+        }
+    }
+}
+
 /// What `prepare` gives the frame: its setup, the variant its passes run as, what the passes
 /// before Integrate read (`FrameKey`) and the shadow map's face uniforms (`ShadowMap::uniforms`,
 /// the first `face_count` of them drawn).
@@ -592,6 +640,22 @@ impl Renderer {
             variant: None,
             stale_bindings: true,
         })
+    }
+
+    /// Where the surfaces' shadows come from ([`Renderer::grid_shadows`] before
+    /// [`Renderer::exact_shadows`]).
+    pub fn surface_shadows(&self) -> SurfaceShadows {
+        match (self.grid_shadows, self.exact_shadows) {
+            (true, _) => SurfaceShadows::Grid,
+            (false, true) => SurfaceShadows::Exact,
+            (false, false) => SurfaceShadows::Map,
+        }
+    }
+
+    /// Sets [`Renderer::grid_shadows`] and [`Renderer::exact_shadows`] to `from`.
+    pub fn set_surface_shadows(&mut self, from: SurfaceShadows) {
+        self.grid_shadows = from == SurfaceShadows::Grid;
+        self.exact_shadows = from == SurfaceShadows::Exact;
     }
 
     /// Rebuilds every pipeline from `lib` (after a shader edit). On any error — WGSL that does not

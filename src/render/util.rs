@@ -198,6 +198,17 @@ pub const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
 /// Records a reduction over the image's pixels in one compute pass: `reduce` with a thread per
 /// column of `rows` pixels and 64 columns a workgroup, then `finish` on one thread (Ranges,
 /// ShadowFit).
+/// Workgroups `(x, y)` for `groups` of them in one dispatch: two dimensions past the 65535 one
+/// dimension allows (the shaders take `id.x + id.y * num_workgroups.x * size`).
+pub fn split_groups(groups: u32) -> (u32, u32) {
+    let groups = groups.max(1);
+    if groups > 65535 {
+        (65535, groups.div_ceil(65535))
+    } else {
+        (groups, 1)
+    }
+}
+
 pub fn record_reduction(
     encoder: &mut wgpu::CommandEncoder,
     label: &str,

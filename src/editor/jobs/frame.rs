@@ -6,7 +6,7 @@ use crate::editor::panels::inspector::GridSnapshot;
 use crate::editor::panels::GridLimits;
 use crate::image::Image;
 use crate::params::Grid;
-use crate::render::{FrameInfo, Method, PruneReport};
+use crate::render::{FrameInfo, Method, PruneReport, SurfaceShadows};
 use crate::scene::{Camera, Scene};
 use std::sync::Arc;
 
@@ -30,10 +30,8 @@ pub struct FrameRequest {
     pub height: u32,
     pub method: Method,
     pub shadow_map: u32,
-    /// VSV's surface shadows from the shadow volume (`Renderer::grid_shadows`).
-    pub grid_shadows: bool,
-    /// Under a sun, the surfaces' shadows tested against the triangles (`Renderer::exact_shadows`).
-    pub exact_shadows: bool,
+    /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
+    pub surface_shadows: SurfaceShadows,
     /// Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
     /// The user is dragging or scrolling: previews only; the full frame when this turns false.

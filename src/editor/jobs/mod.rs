@@ -13,7 +13,7 @@ use super::command::Command;
 use super::files::{DialogPurpose, Dialogs};
 use crate::gpu::ShaderLibrary;
 use crate::image::Image;
-use crate::render::Method;
+use crate::render::{Method, SurfaceShadows};
 use crate::scene::{load_scene, Scene, SceneError};
 use accuracy::{AccuracyJob, AccuracyResult};
 use render::{DeviceInfo, FrameFailure, Picture, RenderEvent, RenderJob};
@@ -101,8 +101,7 @@ pub struct RenderContent {
     pub surface_only: bool,
     pub method: Method,
     pub shadow_map: u32,
-    pub grid_shadows: bool,
-    pub exact_shadows: bool,
+    pub surface_shadows: SurfaceShadows,
     pub adaptive_pixels: bool,
     pub width: u32,
     pub height: u32,

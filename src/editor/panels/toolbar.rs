@@ -6,7 +6,7 @@ use crate::editor::camera::CameraMode;
 use crate::editor::command::merge_key;
 use crate::editor::view::{ExposureMode, ViewMode};
 use crate::params::{Baseline, Exposure};
-use crate::render::Method;
+use crate::render::{Method, SurfaceShadows};
 use eframe::egui;
 
 #[derive(Default)]
@@ -126,7 +126,7 @@ impl Toolbar {
             cx.jobs.render.device.as_ref().map(|d| d.limits.texture_side).unwrap_or(Baseline::SHADOW_MAP.max as u32);
         let mut size = view.shadow_map;
         // A VSV frame with its shadows from the grid draws no map: the size is kept for later.
-        let unused = view.method == Method::Vsv && view.grid_shadows;
+        let unused = view.method == Method::Vsv && view.surface_shadows == SurfaceShadows::Grid;
         ui.add_enabled_ui(!unused, |ui| {
             egui::ComboBox::new("shadow-map", "shadow map")
                 .selected_text(format!("{size}²"))
@@ -145,12 +145,7 @@ impl Toolbar {
         if matches!(view.method, Method::Vsv | Method::Cartesian) {
             // Where the surfaces' shadows come from: one choice of three (grid shadows are VSV's).
             let vsv = view.method == Method::Vsv;
-            let now = match (vsv && view.grid_shadows, view.exact_shadows) {
-                (true, _) => SurfaceShadows::Grid,
-                (false, true) => SurfaceShadows::Exact,
-                (false, false) => SurfaceShadows::Map,
-            };
-            let mut pick = now;
+            let mut pick = view.surface_shadows;
             egui::ComboBox::new("surface-shadows", "shadows")
                 // (Narrow: the row is fixed, and "adaptive pixels" must stay on it at 1200 px.)
                 .width(52.0)
@@ -164,13 +159,8 @@ impl Toolbar {
                 })
                 .response
                 .on_hover_text(pick.doc());
-            if pick != now {
-                if vsv && (pick == SurfaceShadows::Grid) != view.grid_shadows {
-                    out.push(Command::SetGridShadows(pick == SurfaceShadows::Grid));
-                }
-                if (pick == SurfaceShadows::Exact) != view.exact_shadows {
-                    out.push(Command::SetExactShadows(pick == SurfaceShadows::Exact));
-                }
+            if pick != view.surface_shadows {
+                out.push(Command::SetSurfaceShadows(pick));
             }
         }
         if matches!(view.method, Method::Vsv | Method::Cartesian) {
@@ -228,42 +218,6 @@ impl Toolbar {
         );
         if r.changed() {
             out.push(Command::SetScatterExposure(e));
-        }
-    }
-}
-
-/// The toolbar's choice of where the surfaces' shadows come from (`Renderer::grid_shadows`,
-/// `Renderer::exact_shadows`).
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum SurfaceShadows {
-    Map,
-    Grid,
-    Exact,
-}
-
-impl SurfaceShadows {
-    const ALL: [SurfaceShadows; 3] = [SurfaceShadows::Map, SurfaceShadows::Grid, SurfaceShadows::Exact];
-
-    fn label(self) -> &'static str {
-        match self {
-            SurfaceShadows::Map => "map",
-            SurfaceShadows::Grid => "grid",
-            SurfaceShadows::Exact => "exact",
-        }
-    }
-
-    fn doc(self) -> &'static str {
-        match self {
-            SurfaceShadows::Map => "The surfaces' shadows from the shadow map's filtered texels, like the ray-marching baseline's",
-            SurfaceShadows::Grid => {
-                "The surfaces' shadows from VSV's shadow volume itself: no shadow map is drawn (faster on a GPU), and the shadows are as \
-                 sharp as the grid's bins"
-            }
-            SurfaceShadows::Exact => {
-                "The surfaces' shadows under a sun: each surface point tested against the triangles themselves: the reference's \
-                 shadows, and no shadow map after the first frame (slower than the map on a CPU adapter). A \
-                 point light keeps the map"
-            }
         }
     }
 }
