@@ -15,7 +15,9 @@
 // along the light clears at any slope but the most grazing, where cos theta_i leaves little light
 // to lose). TOL (a millionth of a tile) makes neighbouring triangles overlap at their shared edge:
 // no point slips between them. The same test as the reference's shadow ray (src/reference), up to
-// f32: no texels, no filtering, no bias against acne.
+// f32: no texels, no filtering, no bias against acne. (The test also asks q to lie in T's
+// projection's box widened by TOL, in 256ths of the tile: a point the edges let in always does, and
+// one word per entry then leaves out most of a tile's triangles before their planes are read.)
 //
 // Six dispatches:
 //   `points`  (a thread per pixel) finds each surface point's tile and keeps, per tile, the least
@@ -27,15 +29,19 @@
 //             of them passed over at once); and a tile it covers whole, nearer the light than the
 //             tile's least s - eps, it marks dark (every point of it shadowed) instead (a wall
 //             between the window and the room: on the classroom at 512x512, 807 of the 1 921
-//             tiles with points, docs/results.md, session 44);
-//   `offsets` (one workgroup) turns the counts into each tile's first entry of the list
-//             (an exclusive prefix sum) and the fill's cursors;
-//   `fill`    (a thread per triangle) writes the triangle into the list at those tiles;
+//             tiles with points, docs/results.md, session 44). Each entry is recorded with its
+//             tile, its place among the tile's entries (the count before it) and the part of the
+//             tile the triangle's box covers (`local_box`);
+//   `offsets` (one workgroup) turns the counts into each tile's first entry of the list (an
+//             exclusive prefix sum);
+//   `fill`    (threads striding over the recorded entries) moves each to its place in the list;
 //   `test`    (a thread per pixel) takes a dark tile's shadow, or tests the pixel's point against
-//             its tile's triangles, stopping at the first that hides it, and writes 1 (lit) or 0
-//             (shadowed) for Composite.
-// A triangle edge-on to the light (no area across it) hides nothing a neighbour does not; one whose
-// projection leaves the rectangle keeps the tiles inside it.
+//             its tile's triangles whose box holds the point (a word each, in runs of 32), stopping
+//             at the first that hides it, and writes 1 (lit) or 0 (shadowed) for Composite.
+// A triangle edge-on to the light (no area across it) hides nothing a neighbour does not, nor does
+// a solid's face turned away from the sun (its ray leaves the solid through a face toward the sun
+// later, src/scene/solid.rs): neither is listed. One whose projection leaves the rectangle keeps
+// the tiles inside it.
 
 #import common
 #import workgroup_scan
@@ -51,23 +57,32 @@ struct ExactParams {
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
 @group(0) @binding(1) var<storage, read> shadow_in: ShadowFaces;
 @group(0) @binding(2) var<storage, read> params_in: ExactParams;
-// The scene's triangles: three vec4 world vertices each (SceneGpu::whole_triangles).
+// The scene's triangles: three vec4 world vertices each, the first one's w its mesh
+// (SceneGpu::whole_triangles).
 @group(0) @binding(3) var<storage, read> tris: array<vec4f>;
 // Per tile (T of them), in stretches (where each starts: the `*_at` functions below): [0, T] the
-// number of list entries (count), then the first entry (offsets; entry T the total); the fill's
-// cursors; after them one word, the entries past the capacity; the complement of the least
-// s - eps of the tile's points (`key`; 0 for a tile without points); the greatest; 1 where a
-// triangle darkens the whole tile; then per block of tiles its least (complemented) and greatest.
+// number of list entries (count), then the first entry (offsets; entry T the total); two words,
+// the entries `count` recorded and those past the capacity; the complement of the least s - eps
+// of the tile's points (`key`; 0 for a tile without points); the greatest; 1 where a triangle
+// darkens the whole tile; then per block of tiles its least (complemented) and greatest.
 @group(0) @binding(4) var<storage, read_write> tiles: array<atomic<u32>>;
-// Per triangle: its three edges (n_k, -n_k . q_k) with the depth plane's A, B, C in w, and its
-// tile box (first x, first y, last x, last y; empty when first > last).
+// Per triangle: its three edges (n_k, -n_k . q_k) with the depth plane's A, B, C in w, and the
+// box of its projection in tiles (least u, least v, greatest u, greatest v; empty, least past
+// greatest, for a triangle that darkens nothing).
 @group(0) @binding(5) var<storage, read_write> planes: array<vec4f>;
-@group(0) @binding(6) var<storage, read_write> list: array<u32>;
+// Per entry: the triangle, and its projection's box within the tile (`local_box`).
+@group(0) @binding(6) var<storage, read_write> list: array<vec2u>;
+// Per entry in the order `count` made them: its tile, its place among the tile's entries, and
+// the list entry (`fill` moves it to its tile's stretch of the list).
+@group(0) @binding(11) var<storage, read_write> recorded: array<vec4u>;
 // Per pixel: 1 lit, 0 in the sun's shadow (rows top to bottom).
 @group(0) @binding(7) var<storage, read_write> vis: array<u32>;
 // Surface's distance to the nearest surface (x; negative for the sky) and (albedo, cos theta_i).
 @group(0) @binding(8) var distance: texture_2d<f32>;
 @group(0) @binding(9) var material: texture_2d<f32>;
+// Per mesh (SceneGpu::light_sides): +1 or -1 for a solid, the winding's side toward the light that
+// its shadow needs (src/scene/solid.rs); 0 for an open mesh.
+@group(0) @binding(10) var<storage, read> sides: array<f32>;
 
 var<private> f: Frame;
 var<private> params: ExactParams;
@@ -92,13 +107,13 @@ fn light_point(x: vec3f) -> vec3f {
 }
 
 // Where the stretches of `tiles` start (T: params.tiles.z).
-fn cursors_at() -> u32 { return params.tiles.z + 1u; }
-fn overflow_at() -> u32 { return 2u * params.tiles.z + 1u; }
-fn near_at() -> u32 { return 2u * params.tiles.z + 2u; }
-fn far_at() -> u32 { return 3u * params.tiles.z + 2u; }
-fn dark_at() -> u32 { return 4u * params.tiles.z + 2u; }
+fn recorded_at() -> u32 { return params.tiles.z + 1u; }
+fn overflow_at() -> u32 { return params.tiles.z + 2u; }
+fn near_at() -> u32 { return params.tiles.z + 3u; }
+fn far_at() -> u32 { return 2u * params.tiles.z + 3u; }
+fn dark_at() -> u32 { return 3u * params.tiles.z + 3u; }
 // Per block of BLOCK x BLOCK tiles: the complement of its points' least key and their greatest.
-fn block_near_at() -> u32 { return 5u * params.tiles.z + 2u; }
+fn block_near_at() -> u32 { return 4u * params.tiles.z + 3u; }
 fn block_far_at() -> u32 { return block_near_at() + blocks().x * blocks().y; }
 
 const BLOCK: u32 = 8u;
@@ -223,10 +238,42 @@ fn edge(a: vec2f, b: vec2f) -> vec3f {
     return vec3f(n, -dot(n, a));
 }
 
-// The tiles of triangle t's box (first x, first y, last x, last y) it may darken or list
-// (`tile_role`), whole blocks of them passed over where `block_wanted` says none: `count` adds one
-// to a listing tile's entries and marks a darkened one, `fill` writes t into a listing tile's list.
-fn visit_tiles(t: u32, e0: vec4f, e1: vec4f, e2: vec4f, box: vec4f, filling: bool) {
+// The tiles a projection's box (in tiles) may reach, widened by TOL and cut to the rectangle
+// (first x, first y, last x, last y; empty, first past last, outside it).
+fn tile_box(bounds: vec4f) -> vec4f {
+    let lo = max(floor(bounds.xy - params.eps.w), vec2f(0.0));
+    let hi = min(floor(bounds.zw + params.eps.w), vec2f(params.tiles.xy) - 1.0);
+    return vec4f(lo, hi);
+}
+
+// Where a point or a box lies within tile (x, y): in 256ths of the tile across and down, clamped
+// to [0, 255]. Rounding keeps order (fl(a - x) grows with a, and * 256 is exact), so a point
+// inside a box [lo, hi] is inside its `local_box` too.
+fn local_cells(p: vec2f, x: f32, y: f32) -> vec2u {
+    return vec2u(clamp(floor((p - vec2f(x, y)) * 256.0), vec2f(0.0), vec2f(255.0)));
+}
+
+// A triangle's projection box `bounds` (in tiles), widened by TOL, within tile (x, y): the first
+// and last cells across (bits 0-7, 8-15) and down (16-23, 24-31). `test` tests a point against
+// the triangle only where its cell lies inside: the same answer (a point the triangle covers,
+// within TOL of its edges, lies in the widened box), for one word's load instead of the planes'.
+fn local_box(bounds: vec4f, x: f32, y: f32) -> u32 {
+    let lo = local_cells(bounds.xy - params.eps.w, x, y);
+    let hi = local_cells(bounds.zw + params.eps.w, x, y);
+    return lo.x | (hi.x << 8u) | (lo.y << 16u) | (hi.y << 24u);
+}
+
+fn in_local_box(cell: vec2u, box: u32) -> bool {
+    return cell.x >= (box & 255u) && cell.x <= ((box >> 8u) & 255u)
+        && cell.y >= ((box >> 16u) & 255u) && cell.y <= (box >> 24u);
+}
+
+// The tiles of triangle t's box it may darken or list (`tile_role`; `bounds`: its projection's
+// box in tiles), whole blocks of them passed over where `block_wanted` says none: a listing tile
+// gets one entry more, recorded with its place among the tile's entries for `fill`, and a
+// darkened one is marked.
+fn visit_tiles(t: u32, e0: vec4f, e1: vec4f, e2: vec4f, bounds: vec4f) {
+    let box = tile_box(bounds);
     let w = params.tiles.x;
     let nb = blocks();
     let b_lo = vec2u(box.xy) / BLOCK;
@@ -240,13 +287,10 @@ fn visit_tiles(t: u32, e0: vec4f, e1: vec4f, e2: vec4f, box: vec4f, filling: boo
                 for (var x = t_lo.x; x <= t_hi.x; x += 1.0) {
                     let role = tile_role(e0, e1, e2, x, y);
                     let tile = u32(y) * w + u32(x);
-                    if (filling) {
-                        if (role == 1u) {
-                            let at = atomicAdd(&tiles[cursors_at() + tile], 1u);
-                            if (at < params.tiles.w) { list[at] = t; }
-                        }
-                    } else if (role == 1u) {
-                        atomicAdd(&tiles[tile], 1u);
+                    if (role == 1u) {
+                        let place = atomicAdd(&tiles[tile], 1u);
+                        let at = atomicAdd(&tiles[recorded_at()], 1u);
+                        if (at < params.tiles.w) { recorded[at] = vec4u(tile, place, t, local_box(bounds, x, y)); }
                     } else if (role == 2u) {
                         atomicStore(&tiles[dark_at() + tile], 1u);
                     }
@@ -261,15 +305,20 @@ fn count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) grou
     copy_parameters();
     let t = thread_index(id, groups);
     if (t >= triangle_count()) { return; }
-    var a = light_point(tris[3u * t].xyz);
-    var b = light_point(tris[3u * t + 1u].xyz);
-    var c = light_point(tris[3u * t + 2u].xyz);
+    let v0 = tris[3u * t];
+    let p1 = tris[3u * t + 1u].xyz;
+    let p2 = tris[3u * t + 2u].xyz;
+    var a = light_point(v0.xyz);
+    var b = light_point(p1);
+    var c = light_point(p2);
     let area2 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    // Tile box; empty for a triangle without area across the light or outside the rectangle.
-    let dims = vec2f(params.tiles.xy);
-    let lo = max(floor(min(a.xy, min(b.xy, c.xy)) - params.eps.w), vec2f(0.0));
-    let hi = min(floor(max(a.xy, max(b.xy, c.xy)) + params.eps.w), dims - 1.0);
-    if (!(abs(area2) > 1e-12) || !all(lo <= hi)) {
+    let bounds = vec4f(min(a.xy, min(b.xy, c.xy)), max(a.xy, max(b.xy, c.xy)));
+    let tiles = tile_box(bounds);
+    // Nothing to list: no area across the light, outside the rectangle, or a solid's face turned
+    // away from the sun (a ray toward the sun that meets such a face leaves the solid later
+    // through a face toward it, which is listed: src/scene/solid.rs; edge-on faces are kept).
+    let away = sides[u32(v0.w)] * dot(cross(p1 - v0.xyz, p2 - v0.xyz), f.light.xyz) < 0.0;
+    if (!(abs(area2) > 1e-12) || !all(tiles.xy <= tiles.zw) || away) {
         planes[4u * t + 3u] = vec4f(1.0, 1.0, 0.0, 0.0);
         return;
     }
@@ -290,12 +339,11 @@ fn count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) grou
     planes[4u * t] = e0;
     planes[4u * t + 1u] = e1;
     planes[4u * t + 2u] = e2;
-    planes[4u * t + 3u] = vec4f(lo, hi);
-    visit_tiles(t, e0, e1, e2, vec4f(lo, hi), false);
+    planes[4u * t + 3u] = bounds;
+    visit_tiles(t, e0, e1, e2, bounds);
 }
 
-// One workgroup: tiles[0, T] become each tile's first entry (tiles[T] the total), and the cursors
-// tiles[T + 1 + i] start there.
+// One workgroup: tiles[0, T] become each tile's first entry (tiles[T] the total).
 @compute @workgroup_size(256)
 fn offsets(@builtin(local_invocation_index) lid: u32) {
     params = params_in;
@@ -306,11 +354,7 @@ fn offsets(@builtin(local_invocation_index) lid: u32) {
         var v = 0u;
         if (i < n) { v = atomicLoad(&tiles[i]); }
         let s = scan_chunk(lid, v);
-        if (i < n) {
-            let first = carried + s.x;
-            atomicStore(&tiles[i], first);
-            atomicStore(&tiles[n + 1u + i], first);
-        }
+        if (i < n) { atomicStore(&tiles[i], carried + s.x); }
         carried += s.y;
     }
     if (lid == 0u) {
@@ -319,17 +363,17 @@ fn offsets(@builtin(local_invocation_index) lid: u32) {
     }
 }
 
+// Each recorded entry to its place in its tile's stretch of the list (threads striding over
+// them: their number is known only here).
 @compute @workgroup_size(64)
 fn fill(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     params = params_in;
-    let t = thread_index(id, groups);
-    if (t >= triangle_count()) { return; }
-    let box = planes[4u * t + 3u];
-    if (!all(box.xy <= box.zw)) { return; }
-    let e0 = planes[4u * t];
-    let e1 = planes[4u * t + 1u];
-    let e2 = planes[4u * t + 2u];
-    visit_tiles(t, e0, e1, e2, box, true);
+    let n = min(atomicLoad(&tiles[recorded_at()]), params.tiles.w);
+    for (var i = id.x; i < n; i += groups.x * 64u) {
+        let e = recorded[i];
+        let at = atomicLoad(&tiles[e.x]) + e.y;
+        if (at < params.tiles.w) { list[at] = e.zw; }
+    }
 }
 
 @compute @workgroup_size(8, 8)
@@ -346,16 +390,27 @@ fn test(@builtin(global_invocation_id) id: vec3u) {
             let end = min(atomicLoad(&tiles[s.tile + 1u]), params.tiles.w);
             let tol = -params.eps.w;
             let q = s.uv;
-            for (var i = first; i < end; i++) {
-                let k = list[i];
-                let e0 = planes[4u * k];
-                let e1 = planes[4u * k + 1u];
-                let e2 = planes[4u * k + 2u];
-                let depth = e0.w * q.x + e1.w * q.y + e2.w;
-                let inside = dot(e0.xy, q) + e0.z >= tol && dot(e1.xy, q) + e1.z >= tol && dot(e2.xy, q) + e2.z >= tol;
-                if (inside && depth < s.reach) {
-                    lit = 0u;
-                    break;
+            let cell = local_cells(q, floor(q.x), floor(q.y));
+            // In runs of 32 entries: first which of them have the point's cell in their box (a
+            // word each), then the planes of only those.
+            for (var run = first; run < end && lit == 1u; run += 32u) {
+                let n = min(end - run, 32u);
+                var near = 0u;
+                for (var j = 0u; j < n; j++) {
+                    near |= select(0u, 1u << j, in_local_box(cell, list[run + j].y));
+                }
+                while (near != 0u) {
+                    let k = list[run + countTrailingZeros(near)].x;
+                    near &= near - 1u;
+                    let e0 = planes[4u * k];
+                    let e1 = planes[4u * k + 1u];
+                    let e2 = planes[4u * k + 2u];
+                    let depth = e0.w * q.x + e1.w * q.y + e2.w;
+                    let inside = dot(e0.xy, q) + e0.z >= tol && dot(e1.xy, q) + e1.z >= tol && dot(e2.xy, q) + e2.z >= tol;
+                    if (inside && depth < s.reach) {
+                        lit = 0u;
+                        break;
+                    }
                 }
             }
         }

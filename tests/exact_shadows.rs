@@ -96,3 +96,27 @@ fn point_lights_keep_the_map() {
     assert!(!passes.contains(&Pass::ExactShadows));
     assert_eq!(map.pixels, exact.pixels);
 }
+
+/// A solid's faces turned away from the sun are not listed (src/scene/solid.rs: a ray toward the
+/// sun that meets one leaves the solid later through a face toward it): the closed box needs fewer
+/// list entries than the same faces as two open meshes, for the same shadows.
+#[test]
+fn a_solids_faces_away_from_the_sun_are_not_listed() {
+    let Some(mut r) = renderer() else { return };
+    let closed = sun_scene();
+    let mut open = closed.clone();
+    let mut box_mesh = open.meshes.pop().expect("the box");
+    // Its bottom face (-y: the first two triangles of face 2) as a mesh of its own: two open meshes.
+    let bottom: Vec<[u32; 3]> = box_mesh.triangles.drain(4..6).collect();
+    let bottom = epivox::scene::Mesh { name: "box bottom".into(), triangles: bottom, ..box_mesh.clone() };
+    open.meshes.extend([box_mesh, bottom]);
+    let (a, _) = whole_image(&mut r, &closed, true, 64);
+    let with_solid = r.read_exact_stats().unwrap().unwrap();
+    let (b, _) = whole_image(&mut r, &open, true, 64);
+    let without = r.read_exact_stats().unwrap().unwrap();
+    eprintln!("entries: closed box {}, open meshes {}", with_solid.entries, without.entries);
+    assert!(with_solid.entries < without.entries, "{with_solid:?} vs {without:?}");
+    // (Surface draws a solid one-sided: a silhouette pixel may round the other way.)
+    let diff = metrics::compare(&a, &b).unwrap();
+    assert!(diff.rel_rmse < 1e-3, "the shadows moved: {diff:?}");
+}

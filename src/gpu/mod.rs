@@ -162,10 +162,15 @@ impl GpuContext {
         format!("{} ({:?}, {})", self.info.name, self.info.backend, self.info.driver_info)
     }
 
+    /// The largest buffer a storage binding can hold (bytes).
+    pub fn max_binding(&self) -> u64 {
+        let l = self.device.limits();
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+    }
+
     /// Checks a buffer size against the device's limits.
     pub fn check_buffer(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let l = self.device.limits();
-        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        let limit = self.max_binding();
         if bytes > limit {
             return Err(GpuError::TooLarge {
                 what: what.to_string(),

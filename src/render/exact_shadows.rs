@@ -36,6 +36,8 @@ bindings! {
         vis: Kind::StorageRw,
         distance: Kind::Texture,
         material: Kind::Texture,
+        sides: Kind::Storage,
+        recorded: Kind::StorageRw,
     }
 }
 
@@ -78,11 +80,14 @@ pub struct ExactShadows {
     bind_group: Option<wgpu::BindGroup>,
     /// An [`ExactParams`].
     params: wgpu::Buffer,
-    /// Per tile its entries, then its first entry; the fill's cursors; the overflow count.
+    /// Per tile its entries, then its first entry; the entries recorded and past the capacity;
+    /// the tiles' and blocks' bounds (exact_shadows.wgsl).
     tiles: Option<wgpu::Buffer>,
     /// Per triangle its edges, depth plane and tile box (four `vec4<f32>`).
     planes: Option<wgpu::Buffer>,
     list: Option<wgpu::Buffer>,
+    /// The entries as `count` made them (tile, place, list entry), for `fill`.
+    recorded: Option<wgpu::Buffer>,
     /// Per pixel 1 lit, 0 shadowed (`u32`): what Composite reads.
     pub vis: Option<wgpu::Buffer>,
     /// The last frame's list entries and those past the capacity, copied out for the renderer.
@@ -97,6 +102,13 @@ pub struct ExactShadows {
 impl ExactShadows {
     /// Tiles over the fitted rectangle: about `TILE_BUDGET` of them, square in scene units.
     pub const TILE_BUDGET: u32 = 8192;
+    /// A list entry: the triangle and its box within the tile (`vec2<u32>`).
+    const ENTRY_BYTES: u64 = 8;
+    /// A recorded entry: its tile and place there, and the list entry (`vec4<u32>`): the larger
+    /// of the two buffers an entry takes.
+    pub const RECORDED_BYTES: u64 = 16;
+    /// A triangle's planes: its edges, depth plane and projection's box (four `vec4<f32>`).
+    const PLANE_BYTES: u64 = 64;
     /// The list's first capacity: entries per triangle, and per tile.
     const ENTRIES_PER_TRIANGLE: u32 = 4;
     const ENTRIES_PER_TILE: u32 = 16;
@@ -132,6 +144,7 @@ impl ExactShadows {
             tiles: None,
             planes: None,
             list: None,
+            recorded: None,
             vis: None,
             tile_dims: (0, 0),
             capacity: 0,
@@ -145,13 +158,16 @@ impl ExactShadows {
         self.pipelines.prepare(device, variant);
     }
 
+    /// Workgroups of `fill`, whose threads stride over the recorded entries.
+    const FILL_GROUPS: u32 = 1024;
+
     /// Tiles per side of a block (exact_shadows.wgsl's `BLOCK`).
     pub const BLOCK: u32 = 8;
 
     /// Words of the tiles' buffer for `w x h` tiles (exact_shadows.wgsl, `tiles`).
     fn tile_words((w, h): (u32, u32)) -> u64 {
         let blocks = (w.div_ceil(Self::BLOCK) * h.div_ceil(Self::BLOCK)) as u64;
-        5 * (w * h) as u64 + 2 + 2 * blocks
+        4 * (w * h) as u64 + 3 + 2 * blocks
     }
 
     /// Tiles across and down for a rectangle `aspect` times as wide as high (scene units).
@@ -189,13 +205,14 @@ impl ExactShadows {
         }
         self.tile_dims = tile_dims;
         if self.planes.is_none() || self.triangles != triangles {
-            self.planes = Some(buffer("ExactShadows::planes", triangles as u64 * 64));
+            self.planes = Some(buffer("ExactShadows::planes", triangles as u64 * Self::PLANE_BYTES));
             self.triangles = triangles;
             changed = true;
         }
         let wanted = capacity.max(1);
         if self.list.is_none() || self.capacity < wanted {
-            self.list = Some(buffer("ExactShadows::list", wanted as u64 * 4));
+            self.list = Some(buffer("ExactShadows::list", wanted as u64 * Self::ENTRY_BYTES));
+            self.recorded = Some(buffer("ExactShadows::recorded", wanted as u64 * Self::RECORDED_BYTES));
             self.capacity = wanted;
             changed = true;
         }
@@ -207,11 +224,19 @@ impl ExactShadows {
         changed
     }
 
-    /// The list's first capacity for `triangles` triangles over `tile_dims` tiles: a guess (the
-    /// classroom's 104 000 triangles over 8 192 tiles ask for ~123 000 entries), grown when a frame
-    /// asks for more.
-    pub fn first_capacity(triangles: u32, (w, h): (u32, u32)) -> u32 {
-        triangles.saturating_mul(Self::ENTRIES_PER_TRIANGLE).max((w * h).saturating_mul(Self::ENTRIES_PER_TILE))
+    /// The list's first capacity for `triangles` triangles over `tile_dims` tiles, within a
+    /// binding of `max_binding` bytes: a guess (the classroom's 104 000 triangles over 8 192 tiles
+    /// ask for ~123 000 entries), grown when a frame asks for more.
+    pub fn first_capacity(triangles: u32, (w, h): (u32, u32), max_binding: u64) -> u32 {
+        let guess =
+            triangles.saturating_mul(Self::ENTRIES_PER_TRIANGLE).max((w * h).saturating_mul(Self::ENTRIES_PER_TILE));
+        guess.min((max_binding / Self::RECORDED_BYTES).min(u32::MAX as u64) as u32)
+    }
+
+    /// Whether the per-triangle planes of `triangles` triangles fit a binding of `max_binding`
+    /// bytes (a larger scene keeps the map).
+    pub fn fits(triangles: u32, max_binding: u64) -> bool {
+        triangles as u64 * Self::PLANE_BYTES <= max_binding
     }
 
     /// What the last frame left in the tiles' buffer.
@@ -223,11 +248,11 @@ impl ExactShadows {
         // The non-zero words of the stretch of n from `from`.
         let nonzero = |from: usize| (from..from + n).filter(|&i| at(i) != 0).count();
         Ok(Some(ExactStats {
-            entries: at(n) as u64 + at(2 * n + 1) as u64,
-            overflow: at(2 * n + 1),
+            entries: at(n) as u64,
+            overflow: at(n + 2),
             tiles: n,
-            tiles_with_points: nonzero(2 * n + 2),
-            dark_tiles: nonzero(4 * n + 2),
+            tiles_with_points: nonzero(n + 3),
+            dark_tiles: nonzero(3 * n + 3),
         }))
     }
 
@@ -237,10 +262,12 @@ impl ExactShadows {
         frame: &wgpu::Buffer,
         shadow: &wgpu::Buffer,
         tris: &wgpu::Buffer,
+        sides: &wgpu::Buffer,
         distance: &wgpu::TextureView,
         material: &wgpu::TextureView,
     ) {
-        let (Some(tiles), Some(planes), Some(list), Some(vis)) = (&self.tiles, &self.planes, &self.list, &self.vis)
+        let (Some(tiles), Some(planes), Some(list), Some(recorded), Some(vis)) =
+            (&self.tiles, &self.planes, &self.list, &self.recorded, &self.vis)
         else {
             return;
         };
@@ -256,6 +283,8 @@ impl ExactShadows {
             vis: vis.as_entire_binding(),
             distance: R::TextureView(distance),
             material: R::TextureView(material),
+            sides: sides.as_entire_binding(),
+            recorded: recorded.as_entire_binding(),
         };
         self.bind_group = Some(b.bind(device, "ExactShadows::bind_group", &self.layout));
     }
@@ -298,13 +327,14 @@ impl ExactShadows {
         pass.set_pipeline(offsets);
         pass.dispatch_workgroups(1, 1, 1);
         pass.set_pipeline(fill);
-        pass.dispatch_workgroups(per_triangle.0, per_triangle.1, 1);
+        pass.dispatch_workgroups(self.capacity.div_ceil(64).clamp(1, Self::FILL_GROUPS), 1, 1);
         pass.set_pipeline(test);
         pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
         drop(pass);
+        // The total and the entries past the capacity: words T and T + 2.
         let n = (w * h) as u64;
         encoder.copy_buffer_to_buffer(tiles, n * 4, &self.readback, 0, 4);
-        encoder.copy_buffer_to_buffer(tiles, (2 * n + 1) * 4, &self.readback, 4, 4);
+        encoder.copy_buffer_to_buffer(tiles, (n + 2) * 4, &self.readback, 4, 4);
     }
 
     /// The list entries the last recorded frame's triangles asked for, when they were more than
@@ -312,6 +342,7 @@ impl ExactShadows {
     pub fn overflowed(&self, ctx: &crate::gpu::GpuContext) -> Result<Option<u64>, GpuError> {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.map_read(&self.readback)?);
         let (total, over) = (words.first().copied().unwrap_or(0), words.get(1).copied().unwrap_or(0));
-        Ok((over > 0).then_some(total as u64 + over as u64))
+        // The total counts every entry asked for, those past the capacity too.
+        Ok((over > 0).then_some(total as u64))
     }
 }

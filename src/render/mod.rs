@@ -791,9 +791,7 @@ impl Renderer {
     /// meshes differ from the last upload (a fingerprint of their content), so calling it is only
     /// a way to pay for the upload ahead of the frame.
     pub fn set_scene(&mut self, scene: &Scene) {
-        let l = self.ctx.device.limits();
-        let max_binding = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
-        let gpu = SceneGpu::new(&self.ctx.device, scene, max_binding);
+        let gpu = SceneGpu::new(&self.ctx.device, scene, self.ctx.max_binding());
         self.geometry = Some(Geometry { gpu, fingerprint: scene.geometry_fingerprint() });
         self.stale_bindings = true;
     }
@@ -805,8 +803,7 @@ impl Renderer {
         // The lists Cull fills (CullLists::BYTES_PER_TRIANGLE per triangle of a chunk): past the
         // adapter's largest buffer the scene cannot be voxelized at all.
         let n = scene.triangle_count() as u64;
-        let l = self.ctx.device.limits();
-        let per_chunk = l.max_storage_buffer_binding_size.min(l.max_buffer_size) / SceneGpu::TRIANGLE_BYTES;
+        let per_chunk = self.ctx.max_binding() / SceneGpu::TRIANGLE_BYTES;
         self.ctx.check_buffer(
             &format!("the work lists of {n} triangles"),
             n.min(per_chunk) * CullLists::BYTES_PER_TRIANGLE,
@@ -909,7 +906,15 @@ impl Renderer {
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
         if let Some(tris) = geometry.gpu.whole_triangles() {
-            p.exact_shadows.bind(d, &self.frame_buffer, &self.shadow_uniforms, tris, &t.distance, &t.material);
+            p.exact_shadows.bind(
+                d,
+                &self.frame_buffer,
+                &self.shadow_uniforms,
+                tris,
+                &geometry.gpu.light_sides,
+                &t.distance,
+                &t.material,
+            );
         }
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
@@ -990,8 +995,9 @@ impl Renderer {
             let dims = ExactShadows::tile_dims(self.fit_aspect.unwrap_or(1.0));
             let pixels = width as u64 * height as u64;
             if self.exact_capacity == 0 {
-                self.exact_capacity =
-                    self.exact_first_capacity.unwrap_or_else(|| ExactShadows::first_capacity(triangles, dims));
+                self.exact_capacity = self
+                    .exact_first_capacity
+                    .unwrap_or_else(|| ExactShadows::first_capacity(triangles, dims, self.ctx.max_binding()));
             }
             if self.passes.exact_shadows.ensure(&self.ctx.device, triangles, pixels, dims, self.exact_capacity) {
                 self.stale_bindings = true;
@@ -1125,9 +1131,12 @@ impl Renderer {
         if self.hidden_blocks {
             setup.uniforms.image.w |= frame::FLAG_HIDDEN_BLOCKS;
         }
-        let whole = self.geometry.as_ref().is_some_and(|g| g.gpu.whole_triangles().is_some());
+        // Scenes past one buffer of triangles, or of the test's planes, keep the map.
+        let fits = self.geometry.as_ref().is_some_and(|g| {
+            g.gpu.whole_triangles().is_some() && ExactShadows::fits(g.gpu.triangle_count, self.ctx.max_binding())
+        });
         if self.exact_shadows
-            && whole
+            && fits
             && !setup.frame.is_point()
             && !setup.grid_shadowed()
             && matches!(setup.method, Method::Vsv | Method::Cartesian)
@@ -1350,7 +1359,7 @@ impl Renderer {
         if exact && !reuse && done.is_ok() {
             if let Some(needed) = self.passes.exact_shadows.overflowed(&self.ctx)? {
                 let entries = needed.saturating_mul(5) / 4;
-                self.ctx.check_buffer("the exact shadows' list", entries * 4)?;
+                self.ctx.check_buffer("the exact shadows' list", entries * ExactShadows::RECORDED_BYTES)?;
                 if entries > self.exact_capacity as u64 {
                     self.exact_capacity = entries.min(u32::MAX as u64) as u32;
                     self.drawn = None;
