@@ -10,10 +10,11 @@
 //   nearer:  s_T(q) = A u + B v + C  <  s_P - eps,   s = dot(origin - X, w)
 //
 // (s as the map stores it: the distance from a plane beyond the scene on the light's side, larger
-// away from the light; eps = (EPS_FLOOR + EPS_PER_DISTANCE t) / max(cos theta_i, MIN_COS): P comes
-// from the rasterized distance t, a few f32 steps off its own triangle's plane, which that offset
-// along the light clears at any slope but the most grazing, where cos theta_i leaves little light
-// to lose). TOL (a millionth of a tile) makes neighbouring triangles overlap at their shared edge:
+// away from the light; eps = (EPS_FLOOR + EPS_PER_DISTANCE t + ROUNDING) / max(cos theta_i,
+// MIN_COS): P comes from the rasterized distance t, a few f32 steps off its own triangle's plane,
+// and the rasterizer places it from world positions, which far from the origin keep only their
+// f32 spacing (ROUNDING: a few of those steps); that offset along the light clears it at any slope
+// but the most grazing, where cos theta_i leaves little light to lose). TOL (a millionth of a tile) makes neighbouring triangles overlap at their shared edge:
 // no point slips between them. The same test as the reference's shadow ray (src/reference), up to
 // f32: no texels, no filtering, no bias against acne. (The test also asks q to lie in T's
 // projection's box widened by TOL, in 256ths of the tile: a point the edges let in always does, and
@@ -52,6 +53,9 @@ struct ExactParams {
     tiles: vec4u,
     // x: EPS_FLOOR (scene units), y: EPS_PER_DISTANCE, z: MIN_COS, w: TOL (tiles).
     eps: vec4f,
+    // x: ROUNDING, the scene's positions' f32 rounding (scene units): EPS_PER_ULP times the
+    // largest coordinate of the eye and the scene's box times 2^-23.
+    rounding: vec4f,
 }
 
 @group(0) @binding(0) var<storage, read> frame_in: Frame;
@@ -89,21 +93,27 @@ var<private> params: ExactParams;
 // The fitted map's matrix and its reference point far on the light's side, copied at each entry
 // point (common.wgsl, "Parameters"; the six matrices of a private ShadowFaces would be copied too).
 var<private> sun_matrix: mat4x4f;
-var<private> sun_origin: vec3f;
+// The eye's light-space point (`light_point`).
+var<private> eye_light: vec3f;
 
 fn copy_parameters() {
     f = frame_in;
     params = params_in;
     sun_matrix = shadow_in.view_proj[0];
-    sun_origin = shadow_in.origin.xyz;
+    let c = (sun_matrix * vec4f(f.eye.xyz, 1.0)).xy;
+    eye_light = vec3f(vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * vec2f(params.tiles.xy), dot(shadow_in.origin.xyz - f.eye.xyz, f.light.xyz));
 }
 
-// Light-space point of X: (u, v) in tiles of the fitted rectangle (the map's texel convention:
-// u right, v down) and s.
-fn light_point(x: vec3f) -> vec3f {
-    let c = (sun_matrix * vec4f(x, 1.0)).xy;
-    let uv = vec2f(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * vec2f(params.tiles.xy);
-    return vec3f(uv, dot(sun_origin - x, f.light.xyz));
+// Light-space point of eye + d: (u, v) in tiles of the fitted rectangle (the map's texel
+// convention: u right, v down) and s. From d, the offset from the eye, and the eye's own point:
+// every point and vertex is the same eye_light (whose rounding then moves them all alike) plus a
+// small vector's image. Transforming world positions instead cancels large terms: 141 km from the
+// origin, where f32 positions keep 8 mm, the floor shadowed itself in bands (`tests/exact_shadows.rs`,
+// `exact_shadows_hold_at_every_scale`).
+fn light_point(d: vec3f) -> vec3f {
+    let c = (sun_matrix * vec4f(d, 0.0)).xy;
+    let uv = vec2f(c.x * 0.5, -c.y * 0.5) * vec2f(params.tiles.xy);
+    return vec3f(eye_light.xy + uv, eye_light.z - dot(d, f.light.xyz));
 }
 
 // Where the stretches of `tiles` start (T: params.tiles.z).
@@ -171,12 +181,12 @@ fn surface_point(id: vec2u) -> SurfacePoint {
     let t = textureLoad(distance, p, 0).x;
     let cos_i = textureLoad(material, p, 0).w;
     if (!(t >= 0.0 && cos_i > 0.0)) { return o; }
-    let q = light_point(f.eye.xyz + pixel_dir(f, vec2f(id)) * t);
+    let q = light_point(pixel_dir(f, vec2f(id)) * t);
     let cell = floor(q.xy);
     if (!(all(cell >= vec2f(0.0)) && all(cell < vec2f(params.tiles.xy)))) { return o; }
     o.uv = q.xy;
     o.tile = u32(cell.y) * params.tiles.x + u32(cell.x);
-    o.reach = q.z - (params.eps.x + params.eps.y * t) / max(cos_i, params.eps.z);
+    o.reach = q.z - (params.eps.x + params.eps.y * t + params.rounding.x) / max(cos_i, params.eps.z);
     return o;
 }
 
@@ -308,9 +318,10 @@ fn count(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) grou
     let v0 = tris[3u * t];
     let p1 = tris[3u * t + 1u].xyz;
     let p2 = tris[3u * t + 2u].xyz;
-    var a = light_point(v0.xyz);
-    var b = light_point(p1);
-    var c = light_point(p2);
+    let eye = f.eye.xyz;
+    var a = light_point(v0.xyz - eye);
+    var b = light_point(p1 - eye);
+    var c = light_point(p2 - eye);
     let area2 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
     let bounds = vec4f(min(a.xy, min(b.xy, c.xy)), max(a.xy, max(b.xy, c.xy)));
     let tiles = tile_box(bounds);

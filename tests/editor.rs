@@ -772,11 +772,11 @@ fn surface_shadows_from_the_grid_are_one_pick_and_draw_no_shadow_map() {
     assert!(!picker(&h), "the shadow-map size is disabled for the baseline");
 }
 
-/// The toolbar's "shadows: exact" (`Renderer::exact_shadows`): under a sun, a pick
-/// renders again with the surfaces' shadows tested against the triangles; picking the grid's
-/// instead turns them off.
+/// The toolbar's "shadows" under a sun: exact by default (`Renderer::surface_shadows`: exact, the
+/// surfaces' shadows tested against the triangles); a pick of "map" renders again from the shadow
+/// map and one of "exact" goes back; picking the grid's instead turns exact off.
 #[test]
-fn exact_sun_shadows_are_one_pick() {
+fn exact_sun_shadows_are_the_default_and_one_pick() {
     use epivox::render::Pass;
     let dir = tempfile::tempdir().unwrap();
     let Some(mut h) = harness(options(dir.path())) else { return };
@@ -785,16 +785,22 @@ fn exact_sun_shadows_are_one_pick() {
         irradiance: glam::Vec3::splat(3.0),
     };
     h.state_mut().ed_mut().apply(Command::SetLight(sun, None));
-    let (before, ..) = viewport_pixels(&mut h);
+    let (exact, ..) = viewport_pixels(&mut h);
     let shown = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.passes.clone();
-    assert!(!shown(&h).contains(&Pass::ExactShadows), "exact shadows are on by default");
+    assert!(h.state().ed().exact_shadows(), "exact shadows are not the default");
+    assert!(shown(&h).contains(&Pass::ExactShadows), "the default frame under a sun: {:?}", shown(&h));
+    pick_surface_shadows(&mut h, "map");
+    assert!(!h.state().ed().exact_shadows(), "the click did not reach the view");
+    let (map, ..) = viewport_pixels(&mut h);
+    let passes = shown(&h);
+    assert!(passes.contains(&Pass::ShadowMap) && !passes.contains(&Pass::ExactShadows), "{passes:?}");
+    // The shadows' edges move by a texel or so; the lit surfaces and the shafts stay.
+    let diff = mean_diff(&exact, &map);
+    assert!(diff < 10.0, "the picture changed by {diff:.2} of 255");
     pick_surface_shadows(&mut h, "exact");
     assert!(h.state().ed().exact_shadows(), "the click did not reach the view");
-    let (after, ..) = viewport_pixels(&mut h);
+    viewport_pixels(&mut h);
     assert!(shown(&h).contains(&Pass::ExactShadows), "the frame after the click: {:?}", shown(&h));
-    // The shadows' edges move by a texel or so; the lit surfaces and the shafts stay.
-    let diff = mean_diff(&before, &after);
-    assert!(diff < 10.0, "the picture changed by {diff:.2} of 255");
     // One choice of three: the grid's shadows replace the exact ones.
     pick_surface_shadows(&mut h, "grid");
     assert!(h.state().ed().grid_shadows() && !h.state().ed().exact_shadows());

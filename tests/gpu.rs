@@ -15,7 +15,7 @@ use common::*;
 use epivox::metrics;
 use epivox::params::{Grid, Light};
 use epivox::reference::{self, ReferenceOptions};
-use epivox::render::Method;
+use epivox::render::{Method, SurfaceShadows};
 use glam::Vec3;
 
 #[test]
@@ -446,7 +446,7 @@ fn the_pixel_next_to_the_light_does_not_hang_on_the_directions_last_bits() {
     assert!(off < 1e-4, "the light's pixel is {off:.2e} from the reference's");
 }
 
-/// VSV's surface shadows from the shadow volume (`Renderer::grid_shadows`, integrate.wgsl's
+/// VSV's surface shadows from the shadow volume (`Renderer::surface_shadows`: grid, integrate.wgsl's
 /// "surface shadows"): the frame draws no shadow map (no fit, map or pyramid), its scattered light
 /// is the one the map's frame makes, bit for bit with every pixel integrated (the same casters: the
 /// hidden-triangle test, which reads the map's pyramid, is off for both; with adaptive pixels the
@@ -473,11 +473,11 @@ fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
         ("occluder under the sun", occluder_scene(sun), 0.9),
         ("occluder under a point light", occluder_scene(point_light(Vec3::new(0.2, 3.0, 0.1))), 0.9),
     ] {
-        r.grid_shadows = false;
+        r.surface_shadows = SurfaceShadows::Map;
         r.adaptive_pixels = false;
         let map = r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         assert!(map.passes.contains(&Pass::ShadowMap), "{name}: the map's frame drew no map: {:?}", map.passes);
-        r.grid_shadows = true;
+        r.surface_shadows = SurfaceShadows::Grid;
         let (out, _, along) = along_the_same_segments(&mut r, &scene, 96, 96);
         for pass in [Pass::ShadowFit, Pass::ShadowMap, Pass::ShadowPyramid] {
             assert!(!out.passes.contains(&pass), "{name}: the grid's frame ran {pass:?}: {:?}", out.passes);
@@ -486,9 +486,9 @@ fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
         assert_lit_surfaces_agree(name, &out, &along, bound);
         // With adaptive pixels (the default): the scattered light within the interpolation's 1%.
         r.adaptive_pixels = true;
-        r.grid_shadows = false;
+        r.surface_shadows = SurfaceShadows::Map;
         let map = r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
-        r.grid_shadows = true;
+        r.surface_shadows = SurfaceShadows::Grid;
         let grid = r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         let d = metrics::compare(&grid.scatter, &map.scatter).unwrap_or_else(|e| panic!("{e}"));
         assert!(d.rel_rmse < 0.01, "{name}: with adaptive pixels the scattered light moved by {d}");
@@ -501,7 +501,7 @@ fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
 #[test]
 fn surface_shadows_from_the_grid_never_leak_out_of_a_closed_box() {
     let Some(mut r) = renderer() else { return };
-    r.grid_shadows = true;
+    r.surface_shadows = SurfaceShadows::Grid;
     let mut s = epivox::check::cases::floor_scene("inside-closed-box");
     s.light = point_light(Vec3::new(0.1, 1.1, 0.05));
     s.meshes[1] = epivox::scene::build::cuboid("closed box", Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.4, 0.3, 0.4), false);
@@ -535,10 +535,10 @@ fn surface_shadows_from_the_grid_stay_finite_and_close_to_the_maps_in_the_check_
             continue;
         }
         let (w, h) = case.size;
-        r.grid_shadows = false;
+        r.surface_shadows = SurfaceShadows::Map;
         // Cases the renderer refuses are the check's business (it expects the refusal).
         let Ok(map) = r.render(&case.scene, w, h, Method::Vsv) else { continue };
-        r.grid_shadows = true;
+        r.surface_shadows = SurfaceShadows::Grid;
         let out = r.render(&case.scene, w, h, Method::Vsv).unwrap_or_else(|e| panic!("{}: {e}", case.name));
         assert!(!out.passes.contains(&epivox::render::Pass::ShadowMap), "{}: a map was drawn", case.name);
         assert_eq!(out.hdr.count_non_finite(), 0, "{}: non-finite values", case.name);

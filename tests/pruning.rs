@@ -10,7 +10,7 @@ mod common;
 
 use common::*;
 use epivox::params::{Grid, Light, Medium};
-use epivox::render::{Method, Pass, Renderer};
+use epivox::render::{Method, Pass, Renderer, SurfaceShadows};
 use epivox::scene::Scene;
 use glam::Vec3;
 
@@ -182,8 +182,9 @@ fn pruned_plane_rays_change_no_pixel() {
     ];
     let mut least_kept = 1.0f64;
     for (name, s) in &scenes {
-        for grid_shadows in [false, true] {
-            r.grid_shadows = grid_shadows;
+        for from in SurfaceShadows::ALL {
+            let grid_shadows = from == SurfaceShadows::Grid;
+            r.surface_shadows = from;
             let mut images = Vec::new();
             for pruned in [true, false] {
                 r.prune_plane_rays = pruned;
@@ -193,19 +194,21 @@ fn pruned_plane_rays_change_no_pixel() {
                     least_kept = least_kept.min(report.plane_ray_cells);
                 } else {
                     assert_eq!(
-                        report.plane_ray_cells, 1.0,
-                        "{name}: cells were left out (grid shadows: {grid_shadows})"
+                        report.plane_ray_cells,
+                        1.0,
+                        "{name}: cells were left out ({} surface shadows)",
+                        from.label()
                     );
                 }
                 images.push((out.scatter, out.hdr));
             }
-            let what = format!("{name} ({} surface shadows)", if grid_shadows { "grid" } else { "map" });
+            let what = format!("{name} ({} surface shadows)", from.label());
             assert!(images[0].0.pixels.iter().any(|p| p[0] > 0.0), "{what}: nothing scatters");
             assert!(images[0].0.pixels == images[1].0.pixels, "{what}: the scattered light changed");
             assert!(images[0].1.pixels == images[1].1.pixels, "{what}: the final image changed");
         }
     }
-    r.grid_shadows = false;
+    r.surface_shadows = SurfaceShadows::default();
     r.prune_plane_rays = true;
     assert!(least_kept < 0.8, "no scene left out a fifth of the cells ({least_kept})");
 }

@@ -10,7 +10,7 @@ mod common;
 use common::{occluder_scene, renderer};
 use epivox::gpu::ShaderLibrary;
 use epivox::params::{Light, Phase};
-use epivox::render::{Method, Pass, RenderOutput, Renderer};
+use epivox::render::{Method, Pass, RenderOutput, Renderer, SurfaceShadows};
 use epivox::scene::Scene;
 use glam::Vec3;
 
@@ -118,7 +118,12 @@ fn medium_edits_reuse_the_volume_and_give_the_same_image() {
             if !scene.light.is_point() {
                 drawn.push(Pass::ShadowFit);
             }
-            drawn.push(Pass::ShadowMap);
+            // Under a sun VSV's surfaces take exact shadows (the default), drawn with no map once
+            // the first frame has made Cull's pyramid.
+            let exact = !scene.light.is_point()
+                && !matches!(method, Method::Raymarch { .. })
+                && r.surface_shadows == SurfaceShadows::Exact;
+            drawn.push(if exact { Pass::ExactShadows } else { Pass::ShadowMap });
             if method == Method::Vsv {
                 drawn.extend([Pass::Ranges, Pass::Cull, Pass::Voxelize, Pass::Scan]);
             }

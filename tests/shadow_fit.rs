@@ -8,7 +8,7 @@ mod common;
 use common::{dump, quad, renderer};
 use epivox::params::{Grid, Light};
 use epivox::reference::{self, ReferenceOptions};
-use epivox::render::{Method, Pass, Renderer};
+use epivox::render::{Method, Pass, Renderer, SurfaceShadows};
 use epivox::scene::build::haze;
 use epivox::scene::{Camera, Scene};
 use epivox::{metrics, Image};
@@ -52,6 +52,8 @@ fn rel_rmse(a: &Image, b: &Image) -> f64 {
 #[test]
 fn a_sun_map_fitted_to_the_view_shadows_as_the_reference_does() {
     let Some(mut r) = renderer() else { return };
+    // The map's own behaviour: VSV's surfaces lit from it too.
+    r.surface_shadows = SurfaceShadows::Map;
     r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
     let scene = walkway();
     let exact = reference::render(&scene, W, H, &ReferenceOptions { progress: false, ..Default::default() });
@@ -101,6 +103,8 @@ fn a_sun_map_fitted_to_the_view_shadows_as_the_reference_does() {
 #[test]
 fn vsv_shapes_the_sun_map_to_its_rectangle_and_the_march_keeps_the_square() {
     let Some(mut r) = renderer() else { return };
+    // The map's own behaviour: VSV's surfaces lit from it too.
+    r.surface_shadows = SurfaceShadows::Map;
     r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
     let scene = walkway_lengthwise();
     let out = r.render(&scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
@@ -147,6 +151,8 @@ fn walkway_lengthwise() -> Scene {
 #[test]
 fn the_frame_after_a_move_reshapes_the_map_and_would_reuse_foresees_it() {
     let Some(mut r) = renderer() else { return };
+    // The map's own behaviour: VSV's surfaces lit from it too.
+    r.surface_shadows = SurfaceShadows::Map;
     r.set_shadow_map_size(512).unwrap_or_else(|e| panic!("{e}"));
     let frame =
         |r: &mut Renderer, scene: &Scene| r.render_frame(scene, W, H, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));

@@ -320,7 +320,7 @@ pub fn resolution_sweep(quick: bool) -> Vec<u32> {
 }
 
 /// Passes every method runs (but a VSV frame with grid shadows, which draws no map:
-/// `Renderer::grid_shadows`); the rest are the method's own ("volume" time).
+/// `Renderer::surface_shadows`: grid); the rest are the method's own ("volume" time).
 pub const SHARED_PASSES: [Pass; 4] = [Pass::Surface, Pass::ShadowFit, Pass::ShadowMap, Pass::Composite];
 
 /// Median times of one point.
@@ -799,19 +799,18 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     } else {
         "Scan: a thread per column (scan.wgsl, scan_words.wgsl; `--scan threads`, a CPU adapter's default)".into()
     });
-    notes.push(match renderer.surface_shadows() {
+    notes.push(match renderer.surface_shadows {
         SurfaceShadows::Grid => {
             "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw \
              no shadow map, and `final` shows what that does to the surfaces"
                 .into()
         }
         SurfaceShadows::Exact => "VSV's surface shadows under a sun: each surface point tested against the triangles \
-             (`--surface-shadows exact`, `exact_shadows` in the table, counted in its volume time): its frames after \
-             the first draw no shadow map (a point light's keep the cube map)"
+             (`--surface-shadows exact`, the default; `exact_shadows` in the table, counted in its volume time): its \
+             frames after the first draw no shadow map (a point light's keep the cube map)"
             .into(),
         SurfaceShadows::Map => {
-            "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`, the default)"
-                .into()
+            "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`)".into()
         }
     });
     notes.push(if renderer.adaptive_pixels {

@@ -116,8 +116,8 @@ pub struct PassChoices {
     /// GPU, threads on a CPU adapter: `Renderer::scan_columns`].
     #[arg(long, value_enum)]
     pub scan: Option<ScanBy>,
-    /// Where VSV's surface shadows come from [default: map]. The raymarch baseline's always come
-    /// from the shadow map.
+    /// Where VSV's surface shadows come from [default: exact; under a point light the map]. The
+    /// raymarch baseline's always come from the shadow map.
     #[arg(long, value_enum)]
     pub surface_shadows: Option<SurfaceShadows>,
     /// Which pixels VSV integrates [default: adaptive]: `all` integrates every pixel, `adaptive`
@@ -137,7 +137,7 @@ impl PassChoices {
             renderer.scan_columns = by == ScanBy::Columns;
         }
         if let Some(from) = self.surface_shadows {
-            renderer.set_surface_shadows(from);
+            renderer.surface_shadows = from;
         }
         if let Some(pixels) = self.pixels {
             renderer.adaptive_pixels = pixels == Pixels::Adaptive;

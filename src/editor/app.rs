@@ -357,12 +357,12 @@ impl Editor {
     pub fn method(&self) -> Method {
         self.view.method
     }
-    /// Whether VSV's surface shadows come from the shadow volume (`Renderer::grid_shadows`).
+    /// Whether VSV's surface shadows come from the shadow volume (`Renderer::surface_shadows`: grid).
     pub fn grid_shadows(&self) -> bool {
         self.view.surface_shadows == SurfaceShadows::Grid
     }
 
-    /// Whether the surfaces' sun shadows are tested against the triangles (`Renderer::exact_shadows`).
+    /// Whether the surfaces' sun shadows are tested against the triangles (`Renderer::surface_shadows`: exact).
     pub fn exact_shadows(&self) -> bool {
         self.view.surface_shadows == SurfaceShadows::Exact
     }

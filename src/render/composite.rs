@@ -4,7 +4,7 @@
 //!   L_pixel = L_surface * T_view + L_scatter,   T_view = exp(-sigma_t * (the view path's length in the medium))
 //!   L_surface = albedo / pi * max(cos theta_i, 0) * V * E_in
 //!
-//! (V: the shadow map's filtered test, or the shadow volume's [`super::Renderer::grid_shadows`],
+//! (V: the shadow map's filtered test, or the shadow volume's ([`super::Renderer::surface_shadows`]: grid),
 //! or under a sun the test against the triangles [`super::ExactShadows`].)
 //!
 //! Deferred lighting: Surface wrote the nearest surface's albedo, `cos theta_i` and distance, and

@@ -17,6 +17,7 @@
 //! pixels of the tiles past it lit, and reports it ([`ExactShadows::overflowed`]);
 //! `Renderer::render_frame` then grows the list and renders the frame again.
 
+use super::scene_gpu::SceneGpu;
 use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
@@ -49,6 +50,8 @@ pub struct ExactParams {
     pub tiles: UVec4,
     /// `EPS_FLOOR` (scene units), `EPS_PER_DISTANCE`, `MIN_COS`, `TOL` (tiles): see the shader.
     pub eps: Vec4,
+    /// x: the positions' rounding ([`ExactShadows::rounding`], scene units); yzw unused.
+    pub rounding: Vec4,
 }
 
 /// The test's tolerances (exact_shadows.wgsl). The depth offset is along the light, the point's
@@ -61,6 +64,13 @@ const EPS_PER_DISTANCE: f32 = 2e-5;
 const MIN_COS: f32 = 0.02;
 /// A millionth of a tile: neighbouring triangles overlap at their shared edge.
 const TOL: f32 = 1e-6;
+/// f32 steps of the largest coordinate in the depth offset: the rasterizer places a point from
+/// world positions, so far from the origin it lies off its plane by their spacing. The check's
+/// scene 141 km out (8 mm steps) under a sun: the whole image 87% off the reference with none
+/// (the floor shadowed itself in bands), 34% with a quarter step, 8.25% from half a step on, as
+/// the map's 8.6% (`tests/exact_shadows.rs`, `exact_shadows_hold_at_every_scale`; session 45).
+/// Near the origin it is far below EPS_FLOOR.
+const EPS_PER_ULP: f32 = 2.0;
 
 /// What a frame's test needed ([`ExactShadows::read_stats`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -256,18 +266,19 @@ impl ExactShadows {
         }))
     }
 
+    /// Binds the frame's buffers, `geometry`'s triangles (in one chunk: [`SceneGpu::whole_triangles`];
+    /// else no bind group, and the renderer keeps the map) and the Surface targets.
     pub fn bind(
         &mut self,
         device: &wgpu::Device,
         frame: &wgpu::Buffer,
         shadow: &wgpu::Buffer,
-        tris: &wgpu::Buffer,
-        sides: &wgpu::Buffer,
+        geometry: &SceneGpu,
         distance: &wgpu::TextureView,
         material: &wgpu::TextureView,
     ) {
-        let (Some(tiles), Some(planes), Some(list), Some(recorded), Some(vis)) =
-            (&self.tiles, &self.planes, &self.list, &self.recorded, &self.vis)
+        let (Some(tiles), Some(planes), Some(list), Some(recorded), Some(vis), Some(tris)) =
+            (&self.tiles, &self.planes, &self.list, &self.recorded, &self.vis, geometry.whole_triangles())
         else {
             return;
         };
@@ -283,20 +294,27 @@ impl ExactShadows {
             vis: vis.as_entire_binding(),
             distance: R::TextureView(distance),
             material: R::TextureView(material),
-            sides: sides.as_entire_binding(),
+            sides: geometry.light_sides.as_entire_binding(),
             recorded: recorded.as_entire_binding(),
         };
         self.bind_group = Some(b.bind(device, "ExactShadows::bind_group", &self.layout));
     }
 
-    /// Records the six dispatches for a `width x height` image (after Surface and ShadowFit).
+    /// The depth offset's share for the rounding of positions whose largest coordinate is
+    /// `largest` (scene units): `EPS_PER_ULP` f32 steps there.
+    pub fn rounding(largest: f32) -> f32 {
+        EPS_PER_ULP * largest.abs() * f32::EPSILON
+    }
+
+    /// Records the six dispatches for a `width x height` image (after Surface and ShadowFit); the
+    /// scene's largest coordinate, of the eye and its box, is `largest`.
     pub fn record(
         &self,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         variant: Variant,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        largest: f32,
     ) {
         // Renderer::render_frame prepares every variant it records and binds before it records.
         let (Some([points, block_bounds, count, offsets, fill, test]), Some(bind_group), Some(tiles)) =
@@ -308,6 +326,7 @@ impl ExactShadows {
         let params = ExactParams {
             tiles: UVec4::new(w, h, w * h, self.capacity),
             eps: Vec4::new(EPS_FLOOR, EPS_PER_DISTANCE, MIN_COS, TOL),
+            rounding: Vec4::new(Self::rounding(largest), 0.0, 0.0, 0.0),
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         encoder.clear_buffer(tiles, 0, Some(Self::tile_words((w, h)) * 4));

@@ -12,7 +12,7 @@ pub const FLAG_PHI_WRAPS: u32 = 2;
 /// Nothing scatters (no medium or a dark light): Integrate writes zeros and the voxel passes are skipped.
 pub const FLAG_NO_SCATTER: u32 = 16;
 /// The surfaces' shadows come from the shadow volume (Integrate writes them; no shadow map is
-/// drawn): set by the renderer on VSV frames ([`super::Renderer::grid_shadows`]). Read on the CPU
+/// drawn): set by the renderer on VSV frames ([`super::Renderer::surface_shadows`]: grid). Read on the CPU
 /// only, where it picks the passes' pipelines ([`super::Variant::grid_shadows`]): no shader
 /// branches on it.
 pub const FLAG_GRID_SHADOWS: u32 = 32;
@@ -21,7 +21,7 @@ pub const FLAG_GRID_SHADOWS: u32 = 32;
 /// [`super::Renderer::hidden_blocks`] is off.
 pub const FLAG_HIDDEN_BLOCKS: u32 = 64;
 /// The surfaces' sun shadows are tested against the triangles ([`super::ExactShadows`]), not
-/// looked up in the shadow map: set by the renderer ([`super::Renderer::exact_shadows`]). Read on
+/// looked up in the shadow map: set by the renderer ([`super::Renderer::surface_shadows`]: exact). Read on
 /// the CPU only, like [`FLAG_GRID_SHADOWS`].
 pub const FLAG_EXACT_SHADOWS: u32 = 128;
 

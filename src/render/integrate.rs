@@ -9,7 +9,7 @@
 //! the bins where `q` changes are visited.
 //!
 //! In a VSV frame it also reads the surfaces' shadows from the same bits (the pipeline constant
-//! `GRID_SHADOWS`, [`super::Renderer::grid_shadows`]): the lit fraction of the bins around the
+//! `GRID_SHADOWS`, [`super::Renderer::surface_shadows`]: grid): the lit fraction of the bins around the
 //! surface point, a slope-scaled bias toward the light before it, into the output's alpha for
 //! Composite.
 //!

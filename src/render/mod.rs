@@ -263,12 +263,13 @@ pub enum SurfaceShadows {
     /// The shadow volume itself (integrate.wgsl, "surface shadows"; VSV only): no shadow map is
     /// drawn, and the shadows are as sharp as the grid's bins.
     Grid,
-    /// The shadow map, like the baseline's surfaces: the default.
-    #[default]
+    /// The shadow map, like the baseline's surfaces.
     Map,
     /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
     /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
-    /// lights use the map.
+    /// lights use the map. The default: on the classroom the whole image is half as far from the
+    /// reference as with the map, for the same frame time on llvmpipe (docs/results.md, session 45).
+    #[default]
     Exact,
 }
 
@@ -297,8 +298,8 @@ impl SurfaceShadows {
             }
             SurfaceShadows::Exact => {
                 "The surfaces' shadows under a sun: each surface point tested against the triangles themselves: the \
-                 reference's shadows, and no shadow map after the first frame (slower than the map on a CPU \
-                 adapter). A point light keeps the map"
+                 reference's shadows, and no shadow map after the first frame (the default). A point light keeps the \
+                 map"
             }
         }
     }
@@ -477,24 +478,26 @@ pub struct Renderer {
     /// docs/results.md, session 43); on a GPU every clear is a dispatch of its own, and a plane's
     /// worth of them would cost more than the whole grid's. On for CPU adapters.
     pub clear_kept_cells: bool,
-    /// VSV frames take the surfaces' shadows from the shadow volume instead of a shadow map
-    /// (Integrate reads them from the same bits: `integrate.wgsl`, "surface shadows"), and draw no
-    /// shadow map at all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The
-    /// scattered light is the same; the surfaces' shadows are as sharp as the grid's bins (the
-    /// classroom's whole image at 512x512 and the default grid: 60.9% relative RMSE against the
-    /// reference, where the 2048 map gives 50.8% and a 1024 map 78%; docs/results.md, sessions 25
-    /// and 27).
-    /// Off by default (quality first); on, a GPU that rasterizes on few units saves the map
-    /// (`--surface-shadows grid`). A frame with nothing to scatter has no shadow volume and uses
-    /// the map either way.
-    pub grid_shadows: bool,
-    /// Frames under a sun (VSV and Cartesian; the march keeps its map) light their surfaces with
-    /// the sun's shadow tested against the triangles themselves ([`ExactShadows`]) instead of
-    /// the shadow map's texels: the surfaces' shadows of the reference's shadow rays, and no map
-    /// drawn once Cull's pyramid of hidden triangles is made (a frame after the light or the
-    /// geometry changed draws one to make it). Point lights keep the cube map; so do scenes whose
-    /// triangles do not fit one storage binding ([`SceneGpu::whole_triangles`]).
-    pub exact_shadows: bool,
+    /// Where the surfaces' shadows come from (the default: [`SurfaceShadows::Exact`]).
+    ///
+    /// - [`SurfaceShadows::Exact`]: frames under a sun (VSV and Cartesian; the march keeps its
+    ///   map) test the sun's shadow on each visible surface point against the triangles
+    ///   themselves ([`ExactShadows`]): the surfaces' shadows of the reference's shadow rays, and
+    ///   no map drawn once Cull's pyramid of hidden triangles is made (a frame after the light or
+    ///   the geometry changed draws one to make it). Point lights keep the cube map; so do scenes
+    ///   whose triangles or planes do not fit one storage binding ([`SceneGpu::whole_triangles`],
+    ///   [`ExactShadows::fits`]). On the classroom the whole image is 21% off the reference
+    ///   against the map's 45%, for about the map's time on llvmpipe (docs/results.md, session 45).
+    /// - [`SurfaceShadows::Map`]: the shadow map's filtered texels, like the baseline's.
+    /// - [`SurfaceShadows::Grid`]: VSV frames take them from the shadow volume (Integrate reads
+    ///   them from the same bits: `integrate.wgsl`, "surface shadows") and draw no shadow map at
+    ///   all: no fit, no map, no pyramid, so Cull skips its hidden-triangle test. The scattered
+    ///   light is the same; the surfaces' shadows are as sharp as the grid's bins (the
+    ///   classroom's whole image at 512x512 and the default grid: 60.9% relative RMSE against
+    ///   the reference, where the 2048 map gives 50.8% and a 1024 map 78%; docs/results.md,
+    ///   sessions 25 and 27): for a GPU that rasterizes on few units. A frame with nothing to
+    ///   scatter has no shadow volume and uses the map.
+    pub surface_shadows: SurfaceShadows,
     /// The list capacity [`ExactShadows`] needs, grown when a frame's triangles overflowed it (0:
     /// none asked yet).
     exact_capacity: u32,
@@ -511,7 +514,7 @@ pub struct Renderer {
     pub adaptive_pixels: bool,
     /// Voxelize and Scan keep, per plane, only the ray cells its pixels read
     /// ([`GridMapping::plane_rays`]; part of pruning: off with `prune`, and on its own only to
-    /// compare, `tests/pruning.rs`; frames with [`Renderer::grid_shadows`] keep every cell).
+    /// compare, `tests/pruning.rs`; frames with grid surface shadows ([`Renderer::surface_shadows`]) keep every cell).
     /// The image is the same to the bit; on the classroom 14% of the grid's non-zero words lay
     /// past a plane's last read cell and 23% before its first, where they now fold into one
     /// (docs/results.md, session 33).
@@ -612,8 +615,7 @@ impl Renderer {
             fit_shadow_map: true,
             shape_shadow_map: true,
             clear_kept_cells,
-            grid_shadows: false,
-            exact_shadows: false,
+            surface_shadows: SurfaceShadows::default(),
             exact_capacity: 0,
             exact_first_capacity: None,
             adaptive_pixels: true,
@@ -640,22 +642,6 @@ impl Renderer {
             variant: None,
             stale_bindings: true,
         })
-    }
-
-    /// Where the surfaces' shadows come from ([`Renderer::grid_shadows`] before
-    /// [`Renderer::exact_shadows`]).
-    pub fn surface_shadows(&self) -> SurfaceShadows {
-        match (self.grid_shadows, self.exact_shadows) {
-            (true, _) => SurfaceShadows::Grid,
-            (false, true) => SurfaceShadows::Exact,
-            (false, false) => SurfaceShadows::Map,
-        }
-    }
-
-    /// Sets [`Renderer::grid_shadows`] and [`Renderer::exact_shadows`] to `from`.
-    pub fn set_surface_shadows(&mut self, from: SurfaceShadows) {
-        self.grid_shadows = from == SurfaceShadows::Grid;
-        self.exact_shadows = from == SurfaceShadows::Exact;
     }
 
     /// Rebuilds every pipeline from `lib` (after a shader edit). On any error — WGSL that does not
@@ -905,17 +891,7 @@ impl Renderer {
         let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
-        if let Some(tris) = geometry.gpu.whole_triangles() {
-            p.exact_shadows.bind(
-                d,
-                &self.frame_buffer,
-                &self.shadow_uniforms,
-                tris,
-                &geometry.gpu.light_sides,
-                &t.distance,
-                &t.material,
-            );
-        }
+        p.exact_shadows.bind(d, &self.frame_buffer, &self.shadow_uniforms, &geometry.gpu, &t.distance, &t.material);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, plane_rays, &p.cull);
@@ -1122,10 +1098,10 @@ impl Renderer {
     }
 
     /// Marks a VSV frame that scatters to take its surface shadows from the shadow volume
-    /// ([`Renderer::grid_shadows`]), and a frame whose Cull tests large triangles' blocks of planes
+    /// (grid surface shadows, [`Renderer::surface_shadows`]), and a frame whose Cull tests large triangles' blocks of planes
     /// ([`Renderer::hidden_blocks`]).
     fn set_frame_flags(&self, scene: &Scene, setup: &mut FrameSetup) {
-        if self.grid_shadows && setup.method == Method::Vsv && scene.needs_scattering() {
+        if self.surface_shadows == SurfaceShadows::Grid && setup.method == Method::Vsv && scene.needs_scattering() {
             setup.uniforms.image.w |= frame::FLAG_GRID_SHADOWS;
         }
         if self.hidden_blocks {
@@ -1135,7 +1111,7 @@ impl Renderer {
         let fits = self.geometry.as_ref().is_some_and(|g| {
             g.gpu.whole_triangles().is_some() && ExactShadows::fits(g.gpu.triangle_count, self.ctx.max_binding())
         });
-        if self.exact_shadows
+        if self.surface_shadows == SurfaceShadows::Exact
             && fits
             && !setup.frame.is_point()
             && !setup.grid_shadowed()
@@ -1268,7 +1244,9 @@ impl Renderer {
                 f.mark(Pass::ShadowMap);
             }
             if exact {
-                p.exact_shadows.record(queue, &mut f.enc, v, width, height);
+                let b = scene.bounds();
+                let largest = [b.min.abs(), b.max.abs(), scene.camera.eye.abs()].map(|v| v.max_element());
+                p.exact_shadows.record(queue, &mut f.enc, v, (width, height), largest.into_iter().fold(0.0, f32::max));
                 f.mark(Pass::ExactShadows);
             }
         }
@@ -1714,7 +1692,12 @@ mod layout_tests {
             fields!(ShadowCullUniforms: light, counts, view_proj, map_size),
             size_of::<ShadowCullUniforms>(),
         );
-        check("exact_shadows.wgsl", "ExactParams", fields!(ExactParams: tiles, eps), size_of::<ExactParams>());
+        check(
+            "exact_shadows.wgsl",
+            "ExactParams",
+            fields!(ExactParams: tiles, eps, rounding),
+            size_of::<ExactParams>(),
+        );
         check(
             "composite.wgsl",
             "ShadowFaces",

@@ -38,7 +38,7 @@ pub struct Variant {
     /// Every grid ray starts on four 32-bit words ([`crate::params::Grid::quad_rays`]): Integrate
     /// reads the grid as `vec4<u32>`. Only Integrate's pipelines depend on it.
     pub quad_rays: bool,
-    /// The frame's surface shadows come from the shadow volume ([`super::Renderer::grid_shadows`]):
+    /// The frame's surface shadows come from the shadow volume ([`super::Renderer::surface_shadows`]: grid):
     /// Integrate computes them, and the frame draws no shadow map. Integrate's pipelines depend on
     /// it, and those of the passes that leave the map's work out of such a frame (Composite's
     /// lookups, Cull's test of triangles the map shows hidden).

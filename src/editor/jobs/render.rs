@@ -550,7 +550,7 @@ impl Worker {
             && full.scene_generation == Some(r.scene_generation)
             && full.keep_geometry == keeps_grids(r, Quality::Full)
             && full.renderer.shadow_map_size() == r.shadow_map
-            && full.renderer.surface_shadows() == r.surface_shadows;
+            && full.renderer.surface_shadows == r.surface_shadows;
         if !fits || !same_lane || *generation != r.scene_generation {
             return false;
         }
@@ -598,7 +598,7 @@ impl Worker {
         if let Err(e) = lane.renderer.set_shadow_map_size(shadow_map) {
             return fail(self, e.to_string());
         }
-        lane.renderer.set_surface_shadows(r.surface_shadows);
+        lane.renderer.surface_shadows = r.surface_shadows;
         lane.renderer.adaptive_pixels = r.adaptive_pixels;
         let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,
