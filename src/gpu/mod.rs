@@ -168,8 +168,9 @@ impl GpuContext {
         l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }
 
-    /// Checks a buffer size against the device's limits.
-    pub fn check_buffer(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+    /// Checks a buffer size against the device's limits; `remedy` completes the error's message
+    /// ("use fewer planes, rays or bins").
+    pub fn check_buffer(&self, what: &str, bytes: u64, remedy: &str) -> Result<(), GpuError> {
         let limit = self.max_binding();
         if bytes > limit {
             return Err(GpuError::TooLarge {
@@ -177,7 +178,7 @@ impl GpuContext {
                 needed: bytes,
                 limit,
                 adapter: self.info.name.clone(),
-                hint: " bytes; use fewer planes, rays or bins".into(),
+                hint: format!(" bytes; {remedy}"),
             });
         }
         Ok(())

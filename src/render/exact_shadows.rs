@@ -20,9 +20,10 @@
 //! to ~68 ms with these, about the map's and its lookups' time, which made it the default under a
 //! sun (docs/results.md, session 45).
 //!
-//! The list's capacity is a guess that grows: a frame whose triangles need more entries leaves the
-//! pixels of the tiles past it lit, and reports it ([`ExactShadows::overflowed`]);
-//! `Renderer::render_frame` then grows the list and renders the frame again.
+//! The list's capacity is a guess that grows: a frame whose triangles need more entries than it
+//! holds tests some points against incomplete lists, and reports it ([`ExactShadows::overflowed`]);
+//! `Renderer::render_frame` then grows the list and renders the frame again, so such a frame is
+//! never returned.
 
 use super::scene_gpu::SceneGpu;
 use super::util::{bindings, Kind};
@@ -100,7 +101,7 @@ pub struct ExactShadows {
     /// Per tile its entries, then its first entry; the entries recorded and past the capacity;
     /// the tiles' and blocks' bounds (exact_shadows.wgsl).
     tiles: Option<wgpu::Buffer>,
-    /// Per triangle its edges, depth plane and tile box (four `vec4<f32>`).
+    /// Per triangle its edges, depth plane and projection's box (four `vec4<f32>`).
     planes: Option<wgpu::Buffer>,
     list: Option<wgpu::Buffer>,
     /// The entries as `count` made them (tile, place, list entry), for `fill`.
@@ -364,7 +365,7 @@ impl ExactShadows {
     }
 
     /// The list entries the last recorded frame's triangles asked for, when they were more than
-    /// its capacity (the pixels of the tiles past it were left lit): waits for that frame.
+    /// its capacity (its test then missed some of them): waits for that frame.
     pub fn overflowed(&self, ctx: &crate::gpu::GpuContext) -> Result<Option<u64>, GpuError> {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&ctx.map_read(&self.readback)?);
         let (total, over) = (words.first().copied().unwrap_or(0), words.get(1).copied().unwrap_or(0));

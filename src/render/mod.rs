@@ -793,6 +793,7 @@ impl Renderer {
         self.ctx.check_buffer(
             &format!("the work lists of {n} triangles"),
             n.min(per_chunk) * CullLists::BYTES_PER_TRIANGLE,
+            "use a scene with fewer triangles",
         )?;
         let during = match &scene.source {
             Some(path) => format!("uploading the {n} triangles of {}", path.display()),
@@ -849,7 +850,7 @@ impl Renderer {
         if self.grid.as_ref().is_some_and(|(g, _)| *g == grid) {
             return Ok(());
         }
-        self.ctx.check_buffer(&format!("the {grid} grid"), grid.bytes())?;
+        self.ctx.check_buffer(&format!("the {grid} grid"), grid.bytes(), "use fewer planes, rays or bins")?;
         let bits = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Renderer::grid_bits"),
             size: grid.bytes(),
@@ -1244,9 +1245,13 @@ impl Renderer {
                 f.mark(Pass::ShadowMap);
             }
             if exact {
-                let b = scene.bounds();
-                let largest = [b.min.abs(), b.max.abs(), scene.camera.eye.abs()].map(|v| v.max_element());
-                p.exact_shadows.record(queue, &mut f.enc, v, (width, height), largest.into_iter().fold(0.0, f32::max));
+                // The largest coordinate of the eye and the meshes' boxes (kept at upload; an
+                // empty mesh's box is infinite and left out).
+                let finite = g.meshes.iter().map(|r| r.bounds).filter(|b| b.min.is_finite() && b.max.is_finite());
+                let largest = finite.fold(scene.camera.eye.abs().max_element(), |m, b| {
+                    m.max(b.min.abs().max_element()).max(b.max.abs().max_element())
+                });
+                p.exact_shadows.record(queue, &mut f.enc, v, (width, height), largest);
                 f.mark(Pass::ExactShadows);
             }
         }
@@ -1337,7 +1342,11 @@ impl Renderer {
         if exact && !reuse && done.is_ok() {
             if let Some(needed) = self.passes.exact_shadows.overflowed(&self.ctx)? {
                 let entries = needed.saturating_mul(5) / 4;
-                self.ctx.check_buffer("the exact shadows' list", entries * ExactShadows::RECORDED_BYTES)?;
+                self.ctx.check_buffer(
+                    "the exact shadows' list",
+                    entries * ExactShadows::RECORDED_BYTES,
+                    "use --surface-shadows map",
+                )?;
                 if entries > self.exact_capacity as u64 {
                     self.exact_capacity = entries.min(u32::MAX as u64) as u32;
                     self.drawn = None;
