@@ -118,7 +118,7 @@ pub fn scaled(mut s: Scene, k: f32, offset: Vec3) -> Scene {
 /// buffer limit allows (halving the rays while not even 32 bins fit).
 pub fn largest_grid(limits: &wgpu::Limits) -> Grid {
     let side = (Grid::PLANES.max as u32).min(limits.max_texture_dimension_2d);
-    let bytes = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    let bytes = crate::gpu::max_binding(limits);
     let (planes, mut rays) = (side, side);
     loop {
         let words = bytes / (planes as u64 * rays as u64 * 4);

@@ -75,6 +75,12 @@ pub struct GpuContext {
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
 
+/// The largest buffer a storage binding can hold under `limits` (bytes): the smaller of the
+/// binding's and the buffer's limits.
+pub fn max_binding(limits: &wgpu::Limits) -> u64 {
+    limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+}
+
 impl GpuContext {
     /// Features we use when present.
     pub const OPTIONAL_FEATURES: wgpu::Features =
@@ -162,10 +168,9 @@ impl GpuContext {
         format!("{} ({:?}, {})", self.info.name, self.info.backend, self.info.driver_info)
     }
 
-    /// The largest buffer a storage binding can hold (bytes).
+    /// The largest buffer a storage binding can hold on this device (bytes): [`max_binding`].
     pub fn max_binding(&self) -> u64 {
-        let l = self.device.limits();
-        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+        max_binding(&self.device.limits())
     }
 
     /// Checks a buffer size against the device's limits; `remedy` completes the error's message

@@ -111,8 +111,7 @@ impl Integrate {
         // a strip in the first list and two in the second.
         let values_bytes = 16 * w * h;
         let list_bytes = 4 * 3 * Self::strips(w, h);
-        let limits = device.limits();
-        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let limit = crate::gpu::max_binding(&device.limits());
         let usable = values_bytes.max(list_bytes) <= limit;
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {

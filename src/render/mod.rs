@@ -1245,12 +1245,7 @@ impl Renderer {
                 f.mark(Pass::ShadowMap);
             }
             if exact {
-                // The largest coordinate of the eye and the meshes' boxes (kept at upload; an
-                // empty mesh's box is infinite and left out).
-                let finite = g.meshes.iter().map(|r| r.bounds).filter(|b| b.min.is_finite() && b.max.is_finite());
-                let largest = finite.fold(scene.camera.eye.abs().max_element(), |m, b| {
-                    m.max(b.min.abs().max_element()).max(b.max.abs().max_element())
-                });
+                let largest = g.largest_coordinate.max(scene.camera.eye.abs().max_element());
                 p.exact_shadows.record(queue, &mut f.enc, v, (width, height), largest);
                 f.mark(Pass::ExactShadows);
             }

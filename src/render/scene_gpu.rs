@@ -57,6 +57,9 @@ pub struct SceneGpu {
     pub lists: CullLists,
     /// Per mesh, in upload order (the index buffer holds them one after the other).
     pub meshes: Vec<MeshRange>,
+    /// The largest magnitude of any coordinate of the meshes' boxes (an empty mesh's infinite box
+    /// left out): how coarsely f32 holds the scene's positions (ExactShadows' depth offset).
+    pub largest_coordinate: f32,
     /// Per mesh, written by [`SceneGpu::update_light_facing`]: `+1` keep only triangles whose
     /// winding normal faces the light, `-1` only those facing away, `0` keep all (f32).
     pub light_sides: wgpu::Buffer,
@@ -163,6 +166,11 @@ impl SceneGpu {
             chunks,
             triangle_count,
             lists: CullLists::new(device, largest),
+            largest_coordinate: meshes
+                .iter()
+                .filter(|r| r.bounds.min.is_finite() && r.bounds.max.is_finite())
+                .map(|r| r.bounds.min.abs().max(r.bounds.max.abs()).max_element())
+                .fold(0.0, f32::max),
             meshes,
             light_sides,
             light_facing: None,

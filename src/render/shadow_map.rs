@@ -293,7 +293,7 @@ impl ShadowMap {
     /// [`super::ShadowPyramid`]). Without room for them in one storage binding (or for the
     /// triangles in one chunk, [`SceneGpu::whole_triangles`]) the faces draw every triangle.
     pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu, pyramid: &wgpu::Buffer) {
-        let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        let limit = crate::gpu::max_binding(&device.limits());
         if self.face_lists.as_ref().is_some_and(|fl| fl.source == geometry.indices && fl.pyramid == *pyramid) {
             return;
         }

@@ -157,7 +157,7 @@ impl Surface {
             return;
         }
         self.eye_list = None;
-        let limit = device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        let limit = crate::gpu::max_binding(&device.limits());
         let bytes = geometry.index_count as u64 * 4;
         let Some(tris) = geometry.whole_triangles().filter(|_| geometry.index_count > 0 && bytes <= limit) else {
             return;

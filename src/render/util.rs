@@ -195,9 +195,6 @@ pub fn compute_pipeline(
 pub const SCENE_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
 
-/// Records a reduction over the image's pixels in one compute pass: `reduce` with a thread per
-/// column of `rows` pixels and 64 columns a workgroup, then `finish` on one thread (Ranges,
-/// ShadowFit).
 /// Workgroups `(x, y)` for `groups` of them in one dispatch: two dimensions past the 65535 one
 /// dimension allows (the shaders take `id.x + id.y * num_workgroups.x * size`).
 pub fn split_groups(groups: u32) -> (u32, u32) {
@@ -209,6 +206,9 @@ pub fn split_groups(groups: u32) -> (u32, u32) {
     }
 }
 
+/// Records a reduction over the image's pixels in one compute pass: `reduce` with a thread per
+/// column of `rows` pixels and 64 columns a workgroup, then `finish` on one thread (Ranges,
+/// ShadowFit).
 pub fn record_reduction(
     encoder: &mut wgpu::CommandEncoder,
     label: &str,

@@ -427,10 +427,7 @@ impl Worker {
             adapter: gpu.adapter_name(),
             software,
             timestamps: gpu.timestamps,
-            limits: GridLimits {
-                buffer_bytes: l.max_storage_buffer_binding_size.min(l.max_buffer_size),
-                texture_side: l.max_texture_dimension_2d,
-            },
+            limits: GridLimits { buffer_bytes: crate::gpu::max_binding(&l), texture_side: l.max_texture_dimension_2d },
             shared_queue,
             startup_error,
         })));
