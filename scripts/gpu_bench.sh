@@ -100,7 +100,7 @@ step render_default_grid_shadows "$epivox" render "$classroom" --size 1024x1024 
 step render_paper_grid_shadows "$epivox" render "$classroom" --size 1024x1024 --grid 1024x1024x256 --json \
     --surface-shadows grid --out "$out/classroom_1024_grid1024x1024x256_grid_shadows.png"
 # VSV with the map's surface shadows (`--surface-shadows map`): the default under the sun is exact
-# since session 45 (compute only, no map after the first frame; on llvmpipe about the map's time,
+# since session 45 (compute only, no map after the first frame; on llvmpipe a frame 2-5% longer than the map's,
 # on a GPU not yet measured), so this is the comparison for it.
 step classroom512_map_shadows "$epivox" bench "$classroom" --size 512x512 --frames 5 --rounds 3 --no-scaling \
     --surface-shadows map --cache-dir "$cache" --out "$out/classroom512_map_shadows"

@@ -17,8 +17,8 @@
 //! one word: a point reads the planes of only the entries whose box holds it (most of a tile's
 //! entries for a lit point do not), and `count` records each entry with its place in its tile, so
 //! that `fill` only moves them. On the classroom at 512x512 on llvmpipe the pass went from ~108
-//! to ~68 ms with these, about the map's and its lookups' time, which made it the default under a
-//! sun (docs/results.md, session 45).
+//! to ~68-77 ms with these, a frame 2-5% longer than the map's, for a whole image half as far
+//! from the reference: the default under a sun (docs/results.md, session 45).
 //!
 //! The list's capacity is a guess that grows: a frame whose triangles need more entries than it
 //! holds tests some points against incomplete lists, and reports it ([`ExactShadows::overflowed`]);

@@ -268,7 +268,7 @@ pub enum SurfaceShadows {
     /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
     /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
     /// lights use the map. The default: on the classroom the whole image is half as far from the
-    /// reference as with the map, for the same frame time on llvmpipe (docs/results.md, session 45).
+    /// reference as with the map, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
     #[default]
     Exact,
 }
@@ -487,7 +487,7 @@ pub struct Renderer {
     ///   the geometry changed draws one to make it). Point lights keep the cube map; so do scenes
     ///   whose triangles or planes do not fit one storage binding ([`SceneGpu::whole_triangles`],
     ///   [`ExactShadows::fits`]). On the classroom the whole image is 21% off the reference
-    ///   against the map's 45%, for about the map's time on llvmpipe (docs/results.md, session 45).
+    ///   against the map's 45%, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
     /// - [`SurfaceShadows::Map`]: the shadow map's filtered texels, like the baseline's.
     /// - [`SurfaceShadows::Grid`]: VSV frames take them from the shadow volume (Integrate reads
     ///   them from the same bits: `integrate.wgsl`, "surface shadows") and draw no shadow map at
