@@ -839,3 +839,34 @@ fn adaptive_pixels_are_one_click_and_the_frame_says_which_pixels_it_integrated()
     h.run();
     assert!(h.query_by_label("adaptive pixels").is_none(), "the baseline offers adaptive pixels");
 }
+
+/// The toolbar's two rows fit the tests' 1200-point window (the app opens at 1280) whatever the
+/// method shows on them, and a narrower window scrolls them sideways instead of wrapping or
+/// cutting them: every control stays on the rows, and the viewport below keeps its place (a
+/// toolbar that grew a row would move it, and a new viewport size renders again).
+#[test]
+fn the_toolbar_fits_its_window_and_scrolls_in_a_narrower_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    settle(&mut h);
+    let width = 1200.0;
+    let right = |h: &Harness<'static, App>, label: &str| h.get_by_label(label).rect().max.x;
+    for label in ["adaptive pixels", "Screenshot…"] {
+        assert!(right(&h, label) <= width, "\"{label}\" ends at {} of {width} points", right(&h, label));
+    }
+    // The baseline's row: its steps slider and map size instead of VSV's switches.
+    h.state_mut().ed_mut().apply(Command::SetMethod(epivox::render::Method::Raymarch { steps: 64, jitter: true }));
+    h.run();
+    let steps = slider(&h, "steps").rect().max.x;
+    assert!(steps <= width, "the baseline's steps slider ends at {steps} of {width} points");
+    h.state_mut().ed_mut().apply(Command::SetMethod(epivox::render::Method::Vsv));
+    settle(&mut h);
+    let top = h.state().ed().viewport_rect().expect("a viewport was laid out").top();
+    h.set_size(egui::vec2(820.0, 820.0));
+    h.run();
+    let narrow = h.state().ed().viewport_rect().expect("a viewport was laid out").top();
+    assert_eq!(top, narrow, "the viewport moved when the window narrowed (the toolbar wrapped)");
+    for label in ["adaptive pixels", "Screenshot…", "Final"] {
+        assert!(h.query_by_label(label).is_some(), "\"{label}\" left the toolbar in a narrow window");
+    }
+}

@@ -799,20 +799,14 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
     } else {
         "Scan: a thread per column (scan.wgsl, scan_words.wgsl; `--scan threads`, a CPU adapter's default)".into()
     });
-    notes.push(match renderer.surface_shadows {
-        SurfaceShadows::Grid => {
-            "VSV's surface shadows: from the shadow volume (`--surface-shadows grid`): its frames draw \
-             no shadow map, and `final` shows what that does to the surfaces"
-                .into()
-        }
-        SurfaceShadows::Exact => "VSV's surface shadows under a sun: each surface point tested against the triangles \
-             (`--surface-shadows exact`, the default; `exact_shadows` in the table, counted in its volume time): its \
-             frames after the first draw no shadow map (a point light's keep the cube map)"
-            .into(),
-        SurfaceShadows::Map => {
-            "VSV's surface shadows: from the shadow map, like the raymarch's (`--surface-shadows map`)".into()
-        }
-    });
+    // What the choice means is SurfaceShadows::doc's; the note adds where the report shows it.
+    let shadows = renderer.surface_shadows;
+    let shown = match shadows {
+        SurfaceShadows::Grid => " `final` shows what that does to the surfaces.",
+        SurfaceShadows::Exact => " `exact_shadows` in the table, counted in VSV's volume time.",
+        SurfaceShadows::Map => "",
+    };
+    notes.push(format!("VSV's surface shadows (`--surface-shadows {}`): {}.{shown}", shadows.label(), shadows.doc()));
     notes.push(if renderer.adaptive_pixels {
         "VSV's Integrate: every fourth pixel along the epipolar lines, then the others where their neighbours \
          on the line do not stand for them (`--pixels adaptive`, the default)"

@@ -7,24 +7,31 @@ use crate::params::Baseline;
 use crate::render::{Method, SurfaceShadows};
 use eframe::egui;
 
-/// What the viewport shows.
+/// What the viewport shows ([`ViewMode::doc`] says it for each).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ViewMode {
-    /// Surfaces seen through the medium plus the scattered light.
     #[default]
     Final,
-    /// The in-scattered light alone.
     Scattered,
-    /// The surfaces without any medium (rendered with the medium's density at 0).
+    /// (Rendered with the medium's density at 0.)
     Surface,
 }
 
 impl ViewMode {
     pub const ALL: [(ViewMode, &'static str); 3] =
-        [(ViewMode::Final, "Final"), (ViewMode::Scattered, "Scattered only"), (ViewMode::Surface, "Surface only")];
+        [(ViewMode::Final, "Final"), (ViewMode::Scattered, "Scattered"), (ViewMode::Surface, "Surfaces")];
 
     pub fn label(self) -> &'static str {
         Self::ALL.iter().find(|(m, _)| *m == self).map(|(_, l)| *l).unwrap_or("?")
+    }
+
+    /// What the view shows, for a tooltip (the variants' docs).
+    pub fn doc(self) -> &'static str {
+        match self {
+            ViewMode::Final => "The surfaces seen through the medium, plus the light it scatters",
+            ViewMode::Scattered => "The light the medium scatters toward the eye, alone (exposed on its own)",
+            ViewMode::Surface => "The surfaces without any medium",
+        }
     }
 }
 

@@ -24,7 +24,7 @@ pub struct FrameRequest {
     pub scene: Arc<Scene>,
     pub scene_generation: u64,
     pub look: Look,
-    /// "Surface only": the medium's density at 0.
+    /// "Surfaces" view: the medium's density at 0.
     pub surface_only: bool,
     pub width: u32,
     pub height: u32,

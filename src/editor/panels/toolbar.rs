@@ -33,6 +33,13 @@ fn shadow_map_sizes(texture_side: u32) -> Vec<u32> {
     (0..32).map(|i| 1u32 << i).filter(|s| *s >= spec.min as u32 && *s <= top).collect()
 }
 
+/// One row of the toolbar: a horizontal strip that scrolls sideways where the window is too narrow.
+fn row(ui: &mut egui::Ui, id: &str, add: impl FnOnce(&mut egui::Ui)) {
+    egui::ScrollArea::horizontal().id_salt(id).auto_shrink([false, true]).show(ui, |ui| {
+        ui.horizontal(add);
+    });
+}
+
 impl Panel for Toolbar {
     fn name(&self) -> &'static str {
         "Toolbar"
@@ -41,17 +48,20 @@ impl Panel for Toolbar {
     fn show(&mut self, ui: &mut egui::Ui, cx: &PanelCtx<'_>, out: &mut Vec<Command>) {
         let view = cx.view;
         // Two fixed rows (not wrapped): the viewport below keeps its size whatever the toolbar
-        // shows (a resize would render again).
-        ui.horizontal(|ui| {
+        // shows (a resize would render again). A window too narrow for a row scrolls it sideways
+        // (its scroll bar floats over it, taking no height).
+        row(ui, "toolbar-view", |ui| {
             for (mode, label) in ViewMode::ALL {
-                if ui.selectable_label(view.mode == mode, label).clicked() && view.mode != mode {
+                if ui.selectable_label(view.mode == mode, label).on_hover_text(mode.doc()).clicked()
+                    && view.mode != mode
+                {
                     out.push(Command::SetView(mode));
                 }
             }
             ui.separator();
             self.method(ui, cx, out);
         });
-        ui.horizontal(|ui| {
+        row(ui, "toolbar-frame", |ui| {
             self.exposure(ui, cx, out);
             ui.separator();
             let mut scale = view.render_scale;
@@ -147,7 +157,7 @@ impl Toolbar {
             let vsv = view.method == Method::Vsv;
             let mut pick = view.surface_shadows;
             egui::ComboBox::new("surface-shadows", "shadows")
-                // (Narrow: the row is fixed, and "adaptive pixels" must stay on it at 1200 px.)
+                // (Narrow: the row must fit a 1200-point window, `tests/editor.rs`, the toolbar test.)
                 .width(52.0)
                 .selected_text(pick.label())
                 .show_ui(ui, |ui| {
