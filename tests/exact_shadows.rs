@@ -69,6 +69,50 @@ fn a_second_frame_draws_no_shadow_map() {
     assert_eq!(first.pixels, second.pixels);
 }
 
+/// A sun that moves from frame to frame (dragged in the editor) draws no map: under exact shadows
+/// the map only makes Cull's pyramid for the frames after it in the same light, and a frame in a
+/// new light culls without one either way. So the frame's scattered light is a fresh renderer's
+/// first frame's in that light, bit for bit, and the first frame of a still sun makes the pyramid
+/// again, for the frames after it.
+#[test]
+fn a_moving_sun_draws_no_map_until_it_stops() {
+    let Some(mut r) = renderer() else { return };
+    r.reuse_unchanged = false;
+    let mut scene = sun_scene();
+    let size = 64;
+    let mut frame = |r: &mut Renderer, scene: &Scene| {
+        let info = r.render_frame(scene, size, size, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+        r.read_output(info).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let first = frame(&mut r, &scene);
+    assert!(first.passes.contains(&Pass::ShadowMap), "the first frame makes the pyramid: {:?}", first.passes);
+    let base = match scene.light {
+        Light::Directional { direction, .. } => direction,
+        Light::Point { .. } => unreachable!("a sun scene"),
+    };
+    for step in 1..=3 {
+        scene.light = Light::Directional {
+            direction: glam::Quat::from_rotation_y(0.05 * step as f32) * base,
+            irradiance: Vec3::splat(3.0),
+        };
+        let moving = frame(&mut r, &scene);
+        for pass in [Pass::ShadowMap, Pass::ShadowPyramid] {
+            assert!(!moving.passes.contains(&pass), "step {step}: the moving sun's frame ran {pass:?}");
+        }
+        assert!(moving.passes.contains(&Pass::ExactShadows), "step {step}: {:?}", moving.passes);
+        let Some(mut fresh) = renderer() else { return };
+        let expected = frame(&mut fresh, &scene);
+        assert!(expected.passes.contains(&Pass::ShadowMap));
+        assert_eq!(moving.scatter.pixels, expected.scatter.pixels, "step {step}: the volume changed");
+    }
+    let still = frame(&mut r, &scene);
+    for pass in [Pass::ShadowMap, Pass::ShadowPyramid] {
+        assert!(still.passes.contains(&pass), "the first frame of a still sun did not run {pass:?}");
+    }
+    let after = frame(&mut r, &scene);
+    assert!(!after.passes.contains(&Pass::ShadowMap), "{:?}", after.passes);
+}
+
 /// A list too short for the frame's triangles grows, and the frame is rendered again with it:
 /// the same image as with room from the start.
 #[test]

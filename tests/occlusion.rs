@@ -11,7 +11,7 @@ mod common;
 
 use common::renderer;
 use epivox::params::{Grid, Light};
-use epivox::render::{Method, Pass};
+use epivox::render::{Method, Pass, SurfaceShadows};
 use epivox::scene::build::quad;
 use glam::Vec3;
 
@@ -86,12 +86,27 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
     assert_eq!(differing, 0, "after the camera move {differing} words of the shadow volume differ");
     assert!(after.0.scatter.pixels == expected.0.scatter.pixels, "after the camera move the scattered light differs");
     assert!(after.0.hdr.pixels == expected.0.hdr.pixels, "after the camera move the final image differs");
-    // A new light direction draws another map: one frame without the test, then with it again.
+    // A new light direction: the frame culls without the test (the old light's pyramid is not
+    // this light's). Where the surfaces take the map's shadows that frame draws the new map and
+    // makes its pyramid, and the next frame culls with it. Under exact surface shadows (the
+    // default) the map is drawn only for the pyramid, and not in a frame whose sun moved since
+    // the last (a light drag would draw one per frame for nothing): the first frame of the still
+    // sun makes it, and the one after it culls with it.
     let mut turned = room.clone();
     turned.light =
         Light::Directional { direction: Vec3::new(-0.1, 1.0, 0.15).normalize(), irradiance: Vec3::splat(3.0) };
-    assert_eq!(frame(&mut r, &turned).1.culled_hidden, 0, "the old light's pyramid was used for the new light");
+    assert_eq!(r.surface_shadows, SurfaceShadows::Exact);
+    let moved_sun = frame(&mut r, &turned);
+    assert_eq!(moved_sun.1.culled_hidden, 0, "the old light's pyramid was used for the new light");
+    assert!(!moved_sun.0.passes.contains(&Pass::ShadowMap), "the moving sun's frame drew a map");
+    let still = frame(&mut r, &turned);
+    assert_eq!(still.1.culled_hidden, 0, "a pyramid was used before one was made in this light");
+    assert!(still.0.passes.contains(&Pass::ShadowPyramid), "the still sun's frame made no pyramid");
     assert!(frame(&mut r, &turned).1.culled_hidden > 0, "the new light's pyramid culled nothing");
+    r.surface_shadows = SurfaceShadows::Map;
+    frame(&mut r, &room);
+    assert_eq!(frame(&mut r, &turned).1.culled_hidden, 0, "the old light's pyramid was used for the new light");
+    assert!(frame(&mut r, &turned).1.culled_hidden > 0, "the map's pyramid of the new light culled nothing");
 }
 
 #[test]

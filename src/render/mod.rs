@@ -266,7 +266,7 @@ pub enum SurfaceShadows {
     /// The shadow map, like the baseline's surfaces.
     Map,
     /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
-    /// reference's shadows, and a map drawn only when the light or the geometry changes. Point
+    /// reference's shadows, and a map drawn only for the first frame of a still light or scene. Point
     /// lights use the map. The default: on the classroom the whole image is half as far from the
     /// reference as with the map, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
     #[default]
@@ -483,8 +483,9 @@ pub struct Renderer {
     /// - [`SurfaceShadows::Exact`]: frames under a sun (VSV and Cartesian; the march keeps its
     ///   map) test the sun's shadow on each visible surface point against the triangles
     ///   themselves ([`ExactShadows`]): the surfaces' shadows of the reference's shadow rays, and
-    ///   no map drawn once Cull's pyramid of hidden triangles is made (a frame after the light or
-    ///   the geometry changed draws one to make it). Point lights keep the cube map; so do scenes
+    ///   no map drawn but to make Cull's pyramid of hidden triangles, in the first frame of a still
+    ///   light (one whose light and casters are the last frame's, or a renderer's first frame):
+    ///   a frame of a moving sun draws none. Point lights keep the cube map; so do scenes
     ///   whose triangles or planes do not fit one storage binding ([`SceneGpu::whole_triangles`],
     ///   [`ExactShadows::fits`]). On the classroom the whole image is 21% off the reference
     ///   against the map's 45%, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
@@ -528,6 +529,10 @@ pub struct Renderer {
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
+    /// The geometry and the sun's direction of the last prepared frame (`None` before any, or
+    /// under a point light): how a frame under exact shadows tells a still sun and scene from
+    /// ones that change from frame to frame.
+    last_sun: Option<(u64, glam::Vec3)>,
     /// The inputs of this frame's eye depth when Surface is to reduce it into the eye's pyramid
     /// for the frames after it (set by `prepare`).
     eye_pyramid_to_build: Option<EyeInputs>,
@@ -624,6 +629,7 @@ impl Renderer {
             fit_readback,
             fit_aspect: None,
             pyramid_to_build: None,
+            last_sun: None,
             eye_pyramid_to_build: None,
             reuse_unchanged: true,
             drawn: None,
@@ -997,7 +1003,18 @@ impl Renderer {
         let (faces, shadow_lookup, face_count) = self.passes.shadow_map.uniforms(scene);
         let (work, build, eye_build) = self.frame_work(&setup, &shadow_lookup);
         setup.uniforms.work = work;
-        self.pyramid_to_build = build;
+        // Under exact shadows the map is drawn only for Cull's pyramid, which serves the frames
+        // after this one in the same light. Where the light or the casters changed since the
+        // last frame (a light dragged, a scene edited) the next frame is likely to change them
+        // again: no map and no pyramid then, and this frame culls as a first frame does (no
+        // pyramid is usable in a new light either way). The first frame of a still light makes it.
+        let sun = match (&scene.light, &self.geometry) {
+            (crate::params::Light::Directional { direction, .. }, Some(g)) => Some((g.fingerprint, *direction)),
+            _ => None,
+        };
+        let moving = setup.exact_shadowed() && self.last_sun.is_some() && self.last_sun != sun;
+        self.pyramid_to_build = build.filter(|_| !moving);
+        self.last_sun = sun;
         self.eye_pyramid_to_build = eye_build;
         self.ctx.queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&setup.uniforms));
         self.ctx.queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow_lookup));
