@@ -80,7 +80,7 @@ fn a_moving_sun_draws_no_map_until_it_stops() {
     r.reuse_unchanged = false;
     let mut scene = sun_scene();
     let size = 64;
-    let mut frame = |r: &mut Renderer, scene: &Scene| {
+    let frame = |r: &mut Renderer, scene: &Scene| {
         let info = r.render_frame(scene, size, size, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         r.read_output(info).unwrap_or_else(|e| panic!("{e}"))
     };
