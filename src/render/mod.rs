@@ -266,7 +266,7 @@ pub enum SurfaceShadows {
     /// The shadow map, like the baseline's surfaces.
     Map,
     /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
-    /// reference's shadows, and a map drawn only for the first frame of a still light or scene. Point
+    /// reference's shadows, and a map drawn only for the first frame of a still light, scene and view. Point
     /// lights use the map. The default: on the classroom the whole image is half as far from the
     /// reference as with the map, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
     #[default]
@@ -484,8 +484,8 @@ pub struct Renderer {
     ///   map) test the sun's shadow on each visible surface point against the triangles
     ///   themselves ([`ExactShadows`]): the surfaces' shadows of the reference's shadow rays, and
     ///   no map drawn but to make Cull's pyramid of hidden triangles, in the first frame of a still
-    ///   light (one whose light and casters are the last frame's, or a renderer's first frame):
-    ///   a frame of a moving sun draws none. Point lights keep the cube map; so do scenes
+    ///   light, scene and view (or a renderer's first frame): a frame of a moving sun draws none,
+    ///   nor one of a moving camera while Cull has a pyramid of this light. Point lights keep the cube map; so do scenes
     ///   whose triangles or planes do not fit one storage binding ([`SceneGpu::whole_triangles`],
     ///   [`ExactShadows::fits`]). On the classroom the whole image is 21% off the reference
     ///   against the map's 45%, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
@@ -529,10 +529,10 @@ pub struct Renderer {
     /// The inputs of this frame's shadow map when the frame is to reduce it into the pyramid
     /// for the frames after it (set by `prepare`).
     pyramid_to_build: Option<MapInputs>,
-    /// The geometry and the sun's direction of the last prepared frame (`None` before any, or
-    /// under a point light): how a frame under exact shadows tells a still sun and scene from
-    /// ones that change from frame to frame.
-    last_sun: Option<(u64, glam::Vec3)>,
+    /// The geometry, the sun's direction and the view a fitted map follows in the last prepared
+    /// frame (`None` before any, or under a point light): how a frame under exact shadows tells a
+    /// still sun, scene and camera from ones that change from frame to frame.
+    last_sun: Option<(u64, glam::Vec3, FitKey)>,
     /// The inputs of this frame's eye depth when Surface is to reduce it into the eye's pyramid
     /// for the frames after it (set by `prepare`).
     eye_pyramid_to_build: Option<EyeInputs>,
@@ -1004,15 +1004,23 @@ impl Renderer {
         let (work, build, eye_build) = self.frame_work(&setup, &shadow_lookup);
         setup.uniforms.work = work;
         // Under exact shadows the map is drawn only for Cull's pyramid, which serves the frames
-        // after this one in the same light. Where the light or the casters changed since the
-        // last frame (a light dragged, a scene edited) the next frame is likely to change them
-        // again: no map and no pyramid then, and this frame culls as a first frame does (no
-        // pyramid is usable in a new light either way). The first frame of a still light makes it.
+        // after this one in the same light. Where the light or the casters changed since the last
+        // frame (a light dragged, a scene edited), or only the view while Cull has a pyramid of
+        // this light (an orbit: Cull projects with the matrix of the view it was made in), the
+        // next frame is likely to change them again: no map and no pyramid then. The frame culls
+        // as it would anyway (with no pyramid in a new light). The first frame of a still light,
+        // scene and view makes it.
         let sun = match (&scene.light, &self.geometry) {
-            (crate::params::Light::Directional { direction, .. }, Some(g)) => Some((g.fingerprint, *direction)),
+            (crate::params::Light::Directional { direction, .. }, Some(g)) => {
+                Some((g.fingerprint, *direction, fit_key(self.fits_map(&setup), &setup.uniforms)))
+            }
             _ => None,
         };
-        let moving = setup.exact_shadowed() && self.last_sun.is_some() && self.last_sun != sun;
+        let moving = setup.exact_shadowed()
+            && match (&self.last_sun, &sun) {
+                (Some((g0, d0, v0)), Some((g1, d1, v1))) => (g0, d0) != (g1, d1) || (v0 != v1 && work.z > 0),
+                _ => false,
+            };
         self.pyramid_to_build = build.filter(|_| !moving);
         self.last_sun = sun;
         self.eye_pyramid_to_build = eye_build;

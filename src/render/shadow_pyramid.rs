@@ -20,8 +20,8 @@
 //! own (shadow_cull.wgsl compares): there leaving the hidden triangles out gives the same map bit
 //! for bit. The frame after the light or the geometry changed runs without the test; a frame whose
 //! map's inputs changed at all makes the pyramid anew (under exact surface shadows, whose frames
-//! draw the map only for it, not while the light or the casters change from frame to frame:
-//! `Renderer::last_sun`).
+//! draw the map only for it, not while the light, the casters or, with a pyramid of this light at
+//! hand, the view change from frame to frame: `Renderer::last_sun`).
 //!
 //! Directional lights only: the cube map of a point light is not reduced (its Cull keeps every
 //! triangle the other tests keep).
