@@ -266,9 +266,10 @@ pub enum SurfaceShadows {
     /// The shadow map, like the baseline's surfaces.
     Map,
     /// Under a sun, each surface point tested against the triangles (exact_shadows.wgsl): the
-    /// reference's shadows, and a map drawn only for the first frame of a still light, scene and view. Point
-    /// lights use the map. The default: on the classroom the whole image is half as far from the
-    /// reference as with the map, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
+    /// reference's shadows, and a map drawn only in the first frame of a still light, scene and
+    /// view. Point lights use the map. The default: on the classroom the whole image is half as
+    /// far from the reference as with the map, for a frame 2-5% longer on llvmpipe
+    /// (docs/results.md, session 45).
     #[default]
     Exact,
 }
@@ -485,10 +486,11 @@ pub struct Renderer {
     ///   themselves ([`ExactShadows`]): the surfaces' shadows of the reference's shadow rays, and
     ///   no map drawn but to make Cull's pyramid of hidden triangles, in the first frame of a still
     ///   light, scene and view (or a renderer's first frame): a frame of a moving sun draws none,
-    ///   nor one of a moving camera while Cull has a pyramid of this light. Point lights keep the cube map; so do scenes
-    ///   whose triangles or planes do not fit one storage binding ([`SceneGpu::whole_triangles`],
-    ///   [`ExactShadows::fits`]). On the classroom the whole image is 21% off the reference
-    ///   against the map's 45%, for a frame 2-5% longer on llvmpipe (docs/results.md, session 45).
+    ///   nor one of a moving camera while Cull has a pyramid of this light. Point lights keep the
+    ///   cube map; so do scenes whose triangles or planes do not fit one storage binding
+    ///   ([`SceneGpu::whole_triangles`], [`ExactShadows::fits`]). On the classroom the whole image
+    ///   is 21% off the reference against the map's 45%, for a frame 2-5% longer on llvmpipe
+    ///   (docs/results.md, session 45).
     /// - [`SurfaceShadows::Map`]: the shadow map's filtered texels, like the baseline's.
     /// - [`SurfaceShadows::Grid`]: VSV frames take them from the shadow volume (Integrate reads
     ///   them from the same bits: `integrate.wgsl`, "surface shadows") and draw no shadow map at
