@@ -533,7 +533,9 @@ pub struct Renderer {
     pyramid_to_build: Option<MapInputs>,
     /// The geometry, the sun's direction and the view a fitted map follows in the last prepared
     /// frame (`None` before any, or under a point light): how a frame under exact shadows tells a
-    /// still sun, scene and camera from ones that change from frame to frame.
+    /// still sun, scene and camera from ones that change from frame to frame. (Not the pyramid's
+    /// `MapInputs`: those hold the map's size too, which the first fit's aspect reshapes in a
+    /// still view.)
     last_sun: Option<(u64, glam::Vec3, FitKey)>,
     /// The inputs of this frame's eye depth when Surface is to reduce it into the eye's pyramid
     /// for the frames after it (set by `prepare`).
