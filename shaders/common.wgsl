@@ -35,6 +35,7 @@ override COSINE_BINS: bool = false; // bins uniform in cos(psi) (point lights on
 override QUAD_RAYS: bool = true;    // every grid ray starts on four words (bins a multiple of 128): Integrate reads them as vec4u
 override GRID_SHADOWS: bool = false; // the surfaces' shadows come from the shadow volume: Integrate computes them, no map is drawn (Integrate, Composite, Cull)
 override EXACT_SHADOWS: bool = false; // the surfaces' sun shadows come from exact_shadows.wgsl's test against the triangles, not the map (Composite)
+override FIRST_HITS: bool = false; // the shadow volume as each light ray's first hit (Voxelize, Integrate; `hit_key` below), not the bits of ray cells
 override WHOLE_RAY_ITEMS: bool = false; // each Voxelize item holds all of a ray's words (a CPU adapter's list): Cull may give a triangle more words than it spans at no cost (triangle_bounds.wgsl)
 
 // flags (bits 1, 4 and 8 were the light type, cosine bins and the Cartesian grid: now overrides)
@@ -297,6 +298,21 @@ fn ray_offset(f: Frame, x: u32, y: u32) -> u32 {
 }
 
 fn is_cartesian() -> bool { return CARTESIAN; }
+
+// The first-hit volume (FIRST_HITS; `Renderer::shadow_volume`): per plane x and bin k, the key of
+// the least angle gamma at which bin k's light ray meets a triangle, planes x bins words (0: no
+// hit), then per word of 32 bins (plane x, word j, index x * words + j) the least and the greatest
+// key of its bins (hit_bounds.wgsl). A point at angle gamma on a view ray of plane x lies on bin
+// k's light ray after that hit, in its shadow, exactly when
+//
+//   volume[x * bins + k] > hit_key(gamma)
+//
+// (gamma grows along a light ray away from the light, DESIGN section 2). The key orders angles
+// backward (the complement of a non-negative float's bits, which order like the floats), so that
+// the least angle is an atomic max over a buffer cleared to zero.
+fn hit_key(gamma: f32) -> u32 {
+    return ~bitcast<u32>(max(gamma, 0.0));
+}
 
 // Continuous (plane, ray) coordinates of a view direction. Cartesian (the paper's section 2): a
 // directional light along a screen axis; planes are the screen rows (or columns) and rays run

@@ -25,6 +25,10 @@
 // session 15.) Every term is a lit run's start or end: it sums lit light directly (never "total
 // minus shadowed"), so a fully shadowed ray is exactly 0.
 //
+// With the first-hit volume (FIRST_HITS, the default) the words are made per pixel: bin k's bit is
+// set where its light ray's first hit comes before the pixel's own angle (hit_word), from each
+// word's bounds where they settle it; the walk over boundaries is the same.
+//
 // By default not every pixel is integrated: along an epipolar line a pixel whose two neighbours
 // on the line agree takes their mean ("pixels from their neighbours", below).
 //
@@ -326,14 +330,79 @@ fn pick(q: vec4u, c: u32) -> u32 {
     return select(select(q.x, q.y, c == 1u), select(q.z, q.w, c == 3u), c >= 2u);
 }
 
-// Word i of the grid.
+// Word i of the grid: of the bit grid, or of shadow bits made from the first-hit volume.
 fn word(i: u32) -> u32 {
+    if (FIRST_HITS) { return hit_word(i); }
     return pick(grid[i / 4u], i % 4u);
+}
+
+// ---- the first-hit volume (FIRST_HITS) ---------------------------------------------------------
+//
+// The grid then holds each light ray's first hit (common.wgsl, `hit_key`), and a plane's "ray" is
+// its words of bins (ray x starts at word x * words): word i = x * words + j has bin 32 j + b's
+// bit set where that light ray's first hit lies before the pixel's own angle, compared exactly
+// (no ray cell). A word whose 32 keys all lie on one side of the pixel's is read from its bounds
+// alone (hit_bounds.wgsl): most of them, as most words hold no shadow boundary.
+
+// hit_key of the pixel's gamma moved HIT_SLACK planes' angle on (set per pixel before its walk,
+// `pixel_key_of`).
+var<private> pixel_key: u32;
+
+// A hit up to HIT_SLACK planes' worth of angle past the pixel's own still shadows it. The pixel
+// blends two planes whose copies of its view ray pass a closed surface's silhouette apart: where
+// the pixel's own ray passes outside a box around the light, its copy in a neighbouring plane may
+// graze the box's inside, lit, and its light rays leave the box just past the pixel's angle. The
+// bits' ray cells hid that (a hit in the pixel's own cell shadows it: up to a cell, 4 planes'
+// worth at the default grid); exact first hits let it through along silhouettes (the tessellated
+// box of tests/watertight.rs: 1 pixel at the default grid, 2% of the light at 64x64x32). Half a
+// plane (sin(gamma) dphi / 2, the displacement of a neighbour's light ray across the view ray,
+// own_shadow_start, over the distance) stops it at a cost of 0.016% of the classroom's 0.740%
+// (docs/results.md, session 47).
+const HIT_SLACK: f32 = 0.5;
+
+fn pixel_key_of(gamma: f32) -> u32 {
+    return hit_key(gamma + HIT_SLACK * sin(gamma) * f.b2.w / f32(f.grid.x));
+}
+
+// Word i's 32 shadow bits from its keys (bit b set where bin 32 j + b's key is greater than the
+// pixel's), where `mixed`; else 0. A loop of 8 or 0 steps, not an if: llvmpipe runs both sides of
+// a branch, and only a loop's trip count (the most any lane of a SIMD group needs) skips work.
+fn hit_bits(i: u32, mixed: bool) -> u32 {
+    var bits = 0u;
+    for (var q = 0u; q < select(0u, 8u, mixed); q++) {
+        let hit = select(vec4u(0u), vec4u(1u, 2u, 4u, 8u), grid[8u * i + q] > vec4u(pixel_key));
+        bits |= (hit.x | hit.y | hit.z | hit.w) << (4u * q);
+    }
+    return bits;
+}
+
+// Word i from its bounds (hit_bounds.wgsl, by fours past the keys), or from its keys where the
+// pixel's key lies between them.
+fn hit_word(i: u32) -> u32 {
+    let at = (f.grid.x * f.grid.z) / 4u + 2u * (i / 4u);
+    let lo = pick(grid[at], i % 4u);
+    let hi = pick(grid[at + 1u], i % 4u);
+    let mixed = lo <= pixel_key && hi > pixel_key;
+    return select(select(0u, ~0u, lo > pixel_key), hit_bits(i, mixed), mixed);
+}
+
+// Words 4g to 4g + 3 of the plane whose words start at `base` (they come in fours, QUAD_RAYS):
+// their bounds as two vectors, the keys only of the words the pixel's key splits.
+fn hit_quad(base: u32, g: u32) -> vec4u {
+    let i = base + 4u * g;
+    let at = (f.grid.x * f.grid.z) / 4u + 2u * (i / 4u);
+    let lo = grid[at];
+    let hi = grid[at + 1u];
+    let key = vec4u(pixel_key);
+    let mixed = lo <= key & hi > key;
+    let built = vec4u(hit_bits(i, mixed.x), hit_bits(i + 1u, mixed.y), hit_bits(i + 2u, mixed.z), hit_bits(i + 3u, mixed.w));
+    return select(select(vec4u(0u), vec4u(~0u), lo > key), built, mixed);
 }
 
 // Words 4g to 4g + 3 of the grid ray that starts at word `base` (past its end: the next ray's,
 // which the callers mask).
 fn quad(base: u32, g: u32) -> vec4u {
+    if (FIRST_HITS && QUAD_RAYS) { return hit_quad(base, g); }
     if (QUAD_RAYS) { return grid[base / 4u + g]; }
     let i = base + 4u * g;
     return vec4u(word(i), word(i + 1u), word(i + 2u), word(i + 3u));
@@ -604,7 +673,11 @@ fn integrate_pixel(id: vec2u) -> PixelLight {
     }
     let y = u32(clamp(gc.y, 0.0, f32(rays - 1u)));
     let weights = vec2f(1.0 - fx, fx);
-    let bases = vec2u(ray_offset(f, u32(x0), y), ray_offset(f, u32(x1), y));
+    var bases = vec2u(ray_offset(f, u32(x0), y), ray_offset(f, u32(x1), y));
+    if (FIRST_HITS) {
+        // Each plane's words of shadow bits are made for this pixel's angle (`hit_word`).
+        bases = vec2u(u32(x0), u32(x1)) * f.grid.w;
+    }
 
     let factor = light_factor(gamma);
     // The lit sum: the scattered light without its light factor.
@@ -621,6 +694,7 @@ fn integrate_pixel(id: vec2u) -> PixelLight {
         var z_end = psi_s;
         if (back > 0.0) { z_end = min(z_end, own_shadow_start(t_s, gp, 1.0, back, 0.0)); }
         let r = Ray(gp, 0.0, z_end, 1.0, 1.0);
+        pixel_key = pixel_key_of(gp);
         let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
         lit_sum = max(lit, vec3f(0.0));
     } else {
@@ -635,6 +709,7 @@ fn integrate_pixel(id: vec2u) -> PixelLight {
             var z_end = t_end * z_scale;
             if (back > 0.0 && t_s <= t_end) { z_end = min(z_end, own_shadow_start(t_s, gamma, z_scale, back, z_start)); }
             let r = Ray(gamma, z_start, z_end, z_scale, 1.0 / max(z_scale, 1e-12));
+            pixel_key = pixel_key_of(gamma);
             let lit = lit(r, vec2u(u32(x0), u32(x1)), bases, weights);
             lit_sum = max(lit, vec3f(0.0));
         }

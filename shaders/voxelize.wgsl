@@ -8,7 +8,9 @@
 //   geometry[x, y, k] = 1   where light ray (phi_x, z_k) meets it at an angle gamma in ray cell y
 //
 // (every hit, not only the first, so the inspector's geometry layer shows the surfaces; of a solid
-// the light lies outside of, only the faces toward the light, which Cull keeps). The rays
+// the light lies outside of, only the faces toward the light, which Cull keeps). With FIRST_HITS
+// (the default volume, `first_hits` below) each light ray keeps instead the least angle it meets a
+// triangle at, volume[x, k] = max over hits of hit_key(gamma) (common.wgsl), no ray cell at all. The rays
 // y stay binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the
 // same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
 // light (Integrate reads the pixel's own ray cell, so it never leaks through a closed surface).
@@ -329,6 +331,10 @@ fn voxelize_item(rec: vec4u, plane: u32, group: u32, p: Tri) {
     let turn = pb.x * pa.y - pb.y * pa.x;
     if (turn > 0.0 || (turn == 0.0 && pb.x > pa.x)) { near_end = pb; }
     let s2 = InPlane(pa, pb - pa, vec2f(z0, z1), 1.0 / (z1 - z0), near_end, offset);
+    if (FIRST_HITS) {
+        first_hits(x, ks, s2);
+        return;
+    }
     // gamma is monotonic along the segment, so the cells of bins ks.x..ks.y are too: when the
     // first and the last bin meet the same cell, every bin between does, and the run is set a
     // word at a time (on the classroom, a third of the bins; one hit each costs an atan2).
@@ -359,8 +365,8 @@ struct InPlane {
     offset: f32,
 }
 
-// The ray cell where bin k's light ray meets the segment.
-fn hit_cell(s: InPlane, k: i32) -> i32 {
+// Where bin k's light ray meets the segment, in the plane's coordinates.
+fn hit_point(s: InPlane, k: i32) -> vec2f {
     let zk = z_of(f32(k) + 0.5 + s.offset);
     var q = s.near_end;
     if (is_point_light()) {
@@ -376,8 +382,31 @@ fn hit_cell(s: InPlane, k: i32) -> i32 {
         // Light ray v = zk.
         q = s.pa + s.dp * clamp((zk - s.z.x) * s.per_z, 0.0, 1.0);
     }
+    return q;
+}
+
+// The ray cell where bin k's light ray meets the segment.
+fn hit_cell(s: InPlane, k: i32) -> i32 {
+    let q = hit_point(s, k);
     // (atan2_approx: cells only bin the hits, and every walk's bin takes one.)
     return ray_cell(atan2_approx(q.y, q.x));
+}
+
+// The first-hit volume (FIRST_HITS, common.wgsl `hit_key`): each bin's light ray keeps the least
+// angle at which a triangle meets it, one atomic max per bin. The angle is exact (atan2, not
+// atan2_approx): Integrate compares it with the pixel's own angle, not with a cell's bounds. A
+// hit past the plane's last kept ray cell is left out, as in the bits (no pixel of the plane
+// reads a light ray that far, and a hit there shadows none of them); one before its first is kept
+// as it is (it shadows them all).
+fn first_hits(x: u32, ks: vec2i, s: InPlane) {
+    let row = x * f.grid.z;
+    for (var k = ks.x; k <= ks.y; k++) {
+        let q = hit_point(s, k);
+        let gamma = atan2(q.y, q.x);
+        if (ray_cell(gamma) >= 0) {
+            atomicMax(&grid[row + u32(k)], hit_key(gamma));
+        }
+    }
 }
 
 // Sets bins ks.x..ks.y of ray cell y in plane x: one atomic OR per word.

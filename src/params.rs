@@ -464,32 +464,28 @@ impl std::fmt::Display for Grid {
     }
 }
 
-/// 2048 x 512 x 768 (96 MiB of bits). A shadow's edge in the medium is placed by the planes and
-/// bins (light space); the rays only order casters before receivers along a view ray. Measured at
-/// 512x512 against the exact reference (relative RMSE of the scattered light; the built-in room
-/// along VSV's own view segments; the classroom's frame on llvmpipe, one process, two rounds),
-/// session 13:
+/// 2048 x 256 x 1536: 2048 planes and 1536 bins of light rays (light space, where a shadow's
+/// edge in the medium is placed) and 256 ray cells. VSV's default volume keeps each light ray's
+/// first hit ([`crate::render::ShadowVolume::FirstHits`]: 12 MiB of keys, the rays only bound the
+/// cells the pixels read); the bits (grid surface shadows, the Cartesian grid) take 96 MiB.
+/// Measured on the classroom at 512x512 against the exact reference (relative RMSE of the
+/// scattered light), llvmpipe, session 47 (docs/results.md):
 ///
-/// | scene | 1536x512x512 | 1536x512x768 | 2048x384x768 | **2048x512x768** |
-/// |---|---:|---:|---:|---:|
-/// | classroom | 1.58% | 1.26% | 1.01% | **0.99%** |
-/// | built-in room | 1.01% | 0.78% | 0.90% | **0.80%** |
-/// | Cornell box | 0.33% | 0.24% | 0.25% | **0.24%** |
-/// | bunny (PSNR) | 132.4 dB | 132.7 dB | 131.3 dB | **133.2 dB** |
-/// | classroom frame | 192-199 ms | 211-231 ms | | **239-251 ms** |
+/// | grid | first hits | bits | the frame, first hits |
+/// |---|---:|---:|---:|
+/// | 2048x512x768 (the default of sessions 13 to 46) | 0.92% | 0.985% | 338 ms (bits 297) |
+/// | **2048x256x1536** | **0.74%** | 0.92% | **390 ms** |
+/// | 2048x512x2048 / 4096x512x1536 | 0.75% / 0.62% | too large | 521 ms (4096 planes) |
 ///
-/// Until session 12 the default was 1536 x 512 x 512 (and 1024 x 512 x 512 until session 11, the
-/// paper's 1024 x 1024 x 256 before that), chosen while Voxelize cost a plane's segment per word of
-/// bins. Since Voxelize walks a plane's words in one item on a CPU adapter (session 13), bins cost
-/// it a quarter less, and 2048 planes of 768 bins take a quarter more frame time for a third less
-/// error on the classroom and a fifth to a quarter less on the other scenes; the march needs its
-/// 8192 map to match it (docs/results.md). Of `epivox check`'s two cases at the default grid, the
-/// eye in shadow behind the axis goes 1.39 -> 1.00% and the HG 0.999 sun lobe 4.78 -> 2.80%. Fewer
-/// rays (2048 x 384 x 768) cost the built-in room and the bunny; 1536 x 512 x 768 is the cheaper
-/// middle (72 MiB).
+/// At 0.74% the as-accurate march needs 2048 steps on the 4096 map (3.27 s): 8.4x, against the
+/// old default's 7.1x at 0.985%. Doubling the bins halves a shadow edge's sampling error along
+/// the light rays, which the bits could not afford (2048x512x1536 is 192 MiB, past llvmpipe's
+/// storage binding). The plane count is not monotonic near the shaft edges (1536 planes: 1.10%).
+/// Until session 46 the default was 2048 x 512 x 768 (from session 13; 1536 x 512 x 512 and
+/// 1024 x 512 x 512 before, the paper's 1024 x 1024 x 256 first).
 impl Default for Grid {
     fn default() -> Self {
-        Grid { planes: 2048, rays: 512, bins: 768, spacing: BinSpacing::UniformAngle }
+        Grid { planes: 2048, rays: 256, bins: 1536, spacing: BinSpacing::UniformAngle }
     }
 }
 

@@ -19,7 +19,7 @@ mod common;
 use common::renderer;
 use epivox::params::{BinSpacing, Grid};
 use epivox::reference::Tracer;
-use epivox::render::{Method, Renderer};
+use epivox::render::{Method, Renderer, ShadowVolume};
 use epivox::scene::build::{cuboid, haze, point, quad, side_camera, sphere, tessellated_cuboid};
 use epivox::scene::{Mesh, Scene};
 use glam::Vec3;
@@ -136,25 +136,35 @@ fn no_light_leaks_into_the_image_at_the_default_grid() {
 
 /// On grids coarse for the image (64 or 128 planes for 96 pixels): view rays that end on the mesh
 /// are still exactly 0; the slivers along its silhouette stay below 1% of the same light's
-/// unshadowed maximum (measured: at most 0.51%, the tessellated box with the light 0.1 below a face
-/// at 64x64x32; 0 to 0.07% for the plain box and the spheres).
+/// unshadowed maximum with the bits (measured: at most 0.51%, the tessellated box with the light
+/// 0.1 below a face at 64x64x32; 0 to 0.07% for the plain box and the spheres) and below 2% with
+/// the first hits, which have no ray cell to hide a neighbouring plane's hit just past the
+/// pixel's angle, only half a plane's slack (integrate.wgsl `HIT_SLACK`; measured: at most 1.26%,
+/// the same box at 64x64x32).
 #[test]
 fn coarse_grids_leak_only_along_silhouettes() {
     let Some(mut r) = renderer() else { return };
     let c = Vec3::new(0.0, 1.2, 0.0);
     let size = 96;
-    for mesh in meshes(c) {
-        let light = lights(c)[1];
-        for g in [grid(64, 64, 32, BinSpacing::UniformAngle), grid(128, 96, 64, BinSpacing::UniformCosine)] {
-            let s = scene(mesh.clone(), light, g);
-            let px = scatter_and_hits(&mut r, &s, size);
-            let on_mesh_lit = px.iter().filter(|(v, on)| *on && *v != 0.0).count();
-            assert_eq!(on_mesh_lit, 0, "{}, grid {g}: {on_mesh_lit} pixels on the mesh lit", s.name);
-            let mut open = s.clone();
-            open.meshes.truncate(1);
-            let open_max = scatter_and_hits(&mut r, &open, size).iter().fold(0.0f32, |a, (v, _)| a.max(*v));
-            let max = px.iter().fold(0.0f32, |a, (v, _)| a.max(*v));
-            assert!(max <= 1e-2 * open_max, "{}, grid {g}: silhouette leak {max} (unshadowed max {open_max})", s.name);
+    for (volume, bound) in [(ShadowVolume::Bits, 1e-2), (ShadowVolume::FirstHits, 2e-2)] {
+        r.shadow_volume = volume;
+        for mesh in meshes(c) {
+            let light = lights(c)[1];
+            for g in [grid(64, 64, 32, BinSpacing::UniformAngle), grid(128, 96, 64, BinSpacing::UniformCosine)] {
+                let s = scene(mesh.clone(), light, g);
+                let px = scatter_and_hits(&mut r, &s, size);
+                let on_mesh_lit = px.iter().filter(|(v, on)| *on && *v != 0.0).count();
+                assert_eq!(on_mesh_lit, 0, "{}, grid {g}: {on_mesh_lit} pixels on the mesh lit", s.name);
+                let mut open = s.clone();
+                open.meshes.truncate(1);
+                let open_max = scatter_and_hits(&mut r, &open, size).iter().fold(0.0f32, |a, (v, _)| a.max(*v));
+                let max = px.iter().fold(0.0f32, |a, (v, _)| a.max(*v));
+                assert!(
+                    max <= bound * open_max,
+                    "{}, {volume:?}, grid {g}: silhouette leak {max} (unshadowed max {open_max})",
+                    s.name
+                );
+            }
         }
     }
 }

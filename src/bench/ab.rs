@@ -21,6 +21,7 @@
 
 use super::{style, time_frames, BenchError, Frames, Point, Timing};
 use crate::metrics::{self, ErrorStats};
+use crate::params::Grid;
 use crate::render::{Method, Pass, Renderer};
 use crate::scene::Scene;
 use crate::Image;
@@ -38,6 +39,9 @@ pub struct AbOptions {
     pub rounds: usize,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    /// B renders the scene at this grid instead of its own (`--b-grid`): a grid against another
+    /// in one process.
+    pub b_grid: Option<Grid>,
 }
 
 /// One side's measurements and images.
@@ -150,18 +154,20 @@ pub fn run(a: &mut Renderer, b: &mut Renderer, scene: &Scene, opts: &AbOptions) 
     let rounds = opts.rounds.max(1);
     let bar = style((2 * (opts.warmup + rounds * (frames + 1))) as u64, opts.progress);
     bar.set_prefix("ab");
-    let mut work = scene.clone();
+    let b_scene = Scene { grid: opts.b_grid.unwrap_or(scene.grid), ..scene.clone() };
+    let scenes = [scene, &b_scene];
+    let mut work = [scene.clone(), b_scene.clone()];
     // Whole frames: a frame that took its shadow volume from the one before would time nothing.
     // Each side keeps its own shadow-map size (time_frames sets the point's).
     let mut points = Vec::with_capacity(2);
-    for r in [&mut *a, &mut *b] {
+    for (r, s) in [&mut *a, &mut *b].into_iter().zip(scenes) {
         r.reuse_unchanged = false;
-        points.push(Point { method: opts.method, grid: scene.grid, shadow_map: r.shadow_map_size() });
+        points.push(Point { method: opts.method, grid: s.grid, shadow_map: r.shadow_map_size() });
     }
-    for (name, r) in [("A", &mut *a), ("B", &mut *b)] {
+    for ((name, r), s) in [("A", &mut *a), ("B", &mut *b)].into_iter().zip(scenes) {
         bar.set_message(format!("warming up {name}"));
         for _ in 0..opts.warmup {
-            r.render_frame(scene, w, h, opts.method)?;
+            r.render_frame(s, w, h, opts.method)?;
             bar.inc(1);
         }
     }
@@ -174,15 +180,15 @@ pub fn run(a: &mut Renderer, b: &mut Renderer, scene: &Scene, opts: &AbOptions) 
             // The first frame after the other side's is not timed (time_frames' warm-up): timed,
             // the side that more often followed the other read 3% slower on the very same shaders
             // (llvmpipe, session 27).
-            let (more, _) = time_frames(r, &mut work, w, h, &points[side], 1, frames)?;
+            let (more, _) = time_frames(r, &mut work[side], w, h, &points[side], 1, frames)?;
             timed[side].pool(more);
             bar.inc(frames as u64 + 1);
         }
     }
     bar.finish_and_clear();
     let mut sides = Vec::with_capacity(2);
-    for (r, frames) in [(&mut *a, &timed[0]), (&mut *b, &timed[1])] {
-        let out = r.render(scene, w, h, opts.method)?;
+    for ((r, frames), s) in [(&mut *a, &timed[0]), (&mut *b, &timed[1])].into_iter().zip(scenes) {
+        let out = r.render(s, w, h, opts.method)?;
         sides.push(side(frames, r.ctx.timestamps, out.scatter, out.hdr));
     }
     let (Some(b_side), Some(a_side)) = (sides.pop(), sides.pop()) else { unreachable!("two sides") };

@@ -29,7 +29,7 @@ use crate::metrics::{self, ErrorStats, MetricsError};
 use crate::params::Grid;
 use crate::reference::ReferenceOptions;
 use crate::render::{FrameSetup, Method, Renderer};
-use crate::render::{Pass, RenderError, SurfaceShadows};
+use crate::render::{Pass, RenderError, ShadowVolume, SurfaceShadows};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -807,6 +807,12 @@ fn run_sweeps(renderer: &mut Renderer, scene: &Scene, opts: &BenchOptions) -> Re
         SurfaceShadows::Map => "",
     };
     notes.push(format!("VSV's surface shadows (`--surface-shadows {}`): {}.{shown}", shadows.label(), shadows.doc()));
+    let volume = renderer.shadow_volume;
+    let shown = match volume {
+        ShadowVolume::FirstHits => " `hit_bounds` in the table takes `scan`'s place.",
+        ShadowVolume::Bits => "",
+    };
+    notes.push(format!("VSV's shadow volume (`--volume {}`): {}.{shown}", volume.label(), volume.doc()));
     notes.push(if renderer.adaptive_pixels {
         "VSV's Integrate: every fourth pixel along the epipolar lines, then the others where their neighbours \
          on the line do not stand for them (`--pixels adaptive`, the default)"

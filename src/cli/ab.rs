@@ -68,6 +68,12 @@ pub struct BSettings {
     /// B's --surface-shadows.
     #[arg(id = "b_surface_shadows", long = "b-surface-shadows", value_enum, value_name = "FROM")]
     pub surface_shadows: Option<super::SurfaceShadows>,
+    /// B's --volume.
+    #[arg(id = "b_volume", long = "b-volume", value_enum, value_name = "VOLUME")]
+    pub volume: Option<super::ShadowVolume>,
+    /// B's --grid: B renders at this grid, A at the scene's (or --grid).
+    #[arg(id = "b_grid", long = "b-grid", value_name = "GRID", value_parser = super::parse_grid)]
+    pub grid: Option<Grid>,
     /// B's --pixels.
     #[arg(id = "b_pixels", long = "b-pixels", value_enum, value_name = "PIXELS")]
     pub pixels: Option<super::Pixels>,
@@ -101,6 +107,7 @@ impl BSettings {
         let choices = super::PassChoices {
             scan: self.scan,
             surface_shadows: self.surface_shadows,
+            volume: self.volume,
             pixels: self.pixels,
             eye_list: self.eye_list,
         };
@@ -131,6 +138,12 @@ impl BSettings {
         }
         if let Some(v) = &self.surface_shadows {
             flags.push(format!("--b-surface-shadows {}", name(v)));
+        }
+        if let Some(v) = &self.volume {
+            flags.push(format!("--b-volume {}", name(v)));
+        }
+        if let Some(g) = &self.grid {
+            flags.push(format!("--b-grid {g}"));
         }
         if let Some(v) = &self.pixels {
             flags.push(format!("--b-pixels {}", name(v)));
@@ -206,6 +219,7 @@ pub fn ab(args: AbArgs) -> Result<()> {
         frames: args.frames as usize,
         rounds: args.rounds as usize,
         progress: !args.json,
+        b_grid: args.b_side.grid,
     };
     let (a_dir, mut b_dir) = (shader_folder(&a), shader_folder(&b));
     let settings = args.b_side.describe();

@@ -28,6 +28,10 @@ pub struct CheckArgs {
     /// were measured at the cases' own grids).
     #[arg(long, value_parser = |s: &str| epivox::params::Grid::parse(s).map_err(|e| e.to_string()))]
     pub grid: Option<epivox::params::Grid>,
+    /// How VSV keeps its shadow volume in every case [default: the renderer's]
+    /// (`Renderer::shadow_volume`).
+    #[arg(long, value_enum)]
+    pub volume: Option<epivox::render::ShadowVolume>,
 }
 
 pub fn check(args: CheckArgs) -> Result<()> {
@@ -56,6 +60,9 @@ pub fn check(args: CheckArgs) -> Result<()> {
         return Ok(());
     }
     let mut renderer = Renderer::new(ctx, &ShaderLibrary::default())?;
+    if let Some(volume) = args.volume {
+        renderer.shadow_volume = volume;
+    }
     let json = args.json;
     let total: usize = cases.iter().map(|c| c.runs.len()).sum();
     let mut done = 0usize;

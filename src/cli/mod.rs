@@ -85,7 +85,7 @@ pub enum ScanBy {
 }
 
 /// Where a VSV frame's surface shadows come from: the library's list.
-pub use epivox::render::SurfaceShadows;
+pub use epivox::render::{ShadowVolume, SurfaceShadows};
 
 /// Which pixels VSV's Integrate integrates (`Renderer::adaptive_pixels`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
@@ -120,6 +120,11 @@ pub struct PassChoices {
     /// raymarch baseline's always come from the shadow map.
     #[arg(long, value_enum)]
     pub surface_shadows: Option<SurfaceShadows>,
+    /// How VSV keeps its shadow volume [default: bits]: `first-hits` keeps each light ray's first
+    /// hit and compares it with the pixel's own angle (no ray cells); the Cartesian grid and grid
+    /// surface shadows keep the bits.
+    #[arg(long, value_enum)]
+    pub volume: Option<ShadowVolume>,
     /// Which pixels VSV integrates [default: adaptive]: `all` integrates every pixel, `adaptive`
     /// every fourth one along the epipolar lines and then those their neighbours cannot stand for.
     #[arg(long, value_enum)]
@@ -138,6 +143,9 @@ impl PassChoices {
         }
         if let Some(from) = self.surface_shadows {
             renderer.surface_shadows = from;
+        }
+        if let Some(volume) = self.volume {
+            renderer.shadow_volume = volume;
         }
         if let Some(pixels) = self.pixels {
             renderer.adaptive_pixels = pixels == Pixels::Adaptive;
@@ -598,6 +606,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 (false, false) => "map",
             };
             j["surface_shadows"] = serde_json::json!(from);
+            let volume = if o.setup.first_hits() { ShadowVolume::FirstHits } else { ShadowVolume::Bits };
+            j["volume"] = serde_json::json!(volume.label());
             if let Some(adaptive) = adaptive_pixels {
                 j["integrated_pixels"] = serde_json::json!(if adaptive { "adaptive" } else { "all" });
             }

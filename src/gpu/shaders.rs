@@ -19,6 +19,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("scan.wgsl", include_str!("../../shaders/scan.wgsl")),
     ("scan_words.wgsl", include_str!("../../shaders/scan_words.wgsl")),
     ("scan_columns.wgsl", include_str!("../../shaders/scan_columns.wgsl")),
+    ("hit_bounds.wgsl", include_str!("../../shaders/hit_bounds.wgsl")),
     ("scatter_table.wgsl", include_str!("../../shaders/scatter_table.wgsl")),
     ("integrate.wgsl", include_str!("../../shaders/integrate.wgsl")),
     ("composite.wgsl", include_str!("../../shaders/composite.wgsl")),

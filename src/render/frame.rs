@@ -24,6 +24,10 @@ pub const FLAG_HIDDEN_BLOCKS: u32 = 64;
 /// looked up in the shadow map: set by the renderer ([`super::Renderer::surface_shadows`]: exact). Read on
 /// the CPU only, like [`FLAG_GRID_SHADOWS`].
 pub const FLAG_EXACT_SHADOWS: u32 = 128;
+/// The frame keeps its shadow volume as each light ray's first hit
+/// ([`super::ShadowVolume::FirstHits`]): set by the renderer. Read on the CPU only, like
+/// [`FLAG_GRID_SHADOWS`].
+pub const FLAG_FIRST_HITS: u32 = 256;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
 #[repr(C)]
@@ -152,6 +156,11 @@ impl FrameSetup {
         self.uniforms.image.w & FLAG_EXACT_SHADOWS != 0
     }
 
+    /// Whether the frame keeps its shadow volume as first hits ([`FLAG_FIRST_HITS`]).
+    pub fn first_hits(&self) -> bool {
+        self.uniforms.image.w & FLAG_FIRST_HITS != 0
+    }
+
     /// The shader variant this frame's passes run as: its light, `phase`, medium, grid axes
     /// (cosine bins only where the method has bins) and surface shadows.
     pub fn variant(&self, phase: &crate::params::Phase) -> super::Variant {
@@ -162,6 +171,7 @@ impl FrameSetup {
             .with_quad_rays(self.mapping.grid.quad_rays())
             .with_grid_shadows(self.grid_shadowed())
             .with_exact_shadows(self.exact_shadowed())
+            .with_first_hits(self.first_hits())
     }
 
     pub fn new(scene: &Scene, width: u32, height: u32, method: Method) -> Result<FrameSetup, FrameError> {

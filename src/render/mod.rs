@@ -18,6 +18,7 @@ mod composite;
 mod cull;
 mod exact_shadows;
 mod frame;
+mod hit_bounds;
 mod integrate;
 mod pass;
 mod ranges;
@@ -37,6 +38,7 @@ pub use composite::{Composite, CompositeBindings};
 pub use cull::{Cull, CullBindings, CullCounts, CullLists};
 pub use exact_shadows::{ExactParams, ExactShadows, ExactShadowsBindings, ExactStats};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
+pub use hit_bounds::{HitBounds, HitBoundsBindings};
 pub use integrate::{Integrate, IntegrateBindings, IntegrateInputs};
 pub use pass::{Pass, PassTiming};
 pub use ranges::{Ranges, RangesBindings};
@@ -306,6 +308,62 @@ impl SurfaceShadows {
     }
 }
 
+/// How VSV keeps its shadow volume ([`Renderer::shadow_volume`]): the CLI's `--volume` and the
+/// renderer read this one list.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default, clap::ValueEnum)]
+pub enum ShadowVolume {
+    /// The paper's voxels: every hit of a light ray sets the bit of the ray cell that holds its
+    /// angle, and Scan's prefix OR along the rays makes the volume (`planes x rays x bins` bits).
+    /// A point's shadow is its ray cell's: up to one cell toward the light.
+    Bits,
+    /// Each light ray's first hit, as its angle: a view ray's point is shadowed where its light
+    /// ray met a triangle at a smaller angle, compared with the pixel's own (no ray cells, no
+    /// scan; `planes x bins` keys, common.wgsl "The first-hit volume"). Epipolar VSV frames whose
+    /// surfaces do not take their shadows from the grid; the others keep the bits. The default
+    /// since session 47: at the default grid the classroom's scattered light is 0.74% off the
+    /// reference (the bits at that grid 0.92%), and the as-accurate march 8.4x the frame's time
+    /// on llvmpipe (docs/results.md).
+    #[default]
+    FirstHits,
+}
+
+impl ShadowVolume {
+    /// In the order a menu offers them.
+    pub const ALL: [ShadowVolume; 2] = [ShadowVolume::FirstHits, ShadowVolume::Bits];
+
+    /// The short name (the CLI's value, the toolbar's item).
+    pub fn label(self) -> &'static str {
+        match self {
+            ShadowVolume::Bits => "bits",
+            ShadowVolume::FirstHits => "first-hits",
+        }
+    }
+
+    /// What it means, for a tooltip.
+    pub fn doc(self) -> &'static str {
+        match self {
+            ShadowVolume::Bits => {
+                "The paper's voxels: a bit per plane, ray cell and bin, scanned along the light rays; a point takes \
+                 its ray cell's shadow (up to one cell toward the light). The inspector's geometry layer shows \
+                 every surface a light ray meets"
+            }
+            ShadowVolume::FirstHits => {
+                "Each light ray's first hit, as its angle from the eye: a point is shadowed where its light ray met \
+                 a triangle before it, compared exactly (no ray cells, no scan, a 16th of the memory at the default \
+                 grid). Grid surface shadows and the Cartesian grid keep the bits"
+            }
+        }
+    }
+
+    /// The volume's bytes for `grid`.
+    pub fn bytes(self, grid: &Grid) -> u64 {
+        match self {
+            ShadowVolume::Bits => grid.bytes(),
+            ShadowVolume::FirstHits => HitBounds::volume_bytes(grid),
+        }
+    }
+}
+
 /// What `prepare` gives the frame: its setup, the variant its passes run as, what the passes
 /// before Integrate read (`FrameKey`) and the shadow map's face uniforms (`ShadowMap::uniforms`,
 /// the first `face_count` of them drawn).
@@ -346,6 +404,7 @@ struct Passes {
     cull: Cull,
     voxelize: Voxelize,
     scan: Scan,
+    hit_bounds: HitBounds,
     scatter_table: ScatterTable,
     integrate: Integrate,
     raymarch: Raymarch,
@@ -367,6 +426,7 @@ impl Passes {
                 cull: Cull::new(d, lib)?,
                 voxelize: Voxelize::new(d, lib, ctx.info.device_type)?,
                 scan: Scan::new(d, lib)?,
+                hit_bounds: HitBounds::new(d, lib)?,
                 scatter_table: ScatterTable::new(d, lib)?,
                 integrate: Integrate::new(d, lib, ctx.info.device_type == wgpu::DeviceType::Cpu)?,
                 raymarch: Raymarch::new(d, lib)?,
@@ -501,6 +561,9 @@ pub struct Renderer {
     ///   sessions 25 and 27): for a GPU that rasterizes on few units. A frame with nothing to
     ///   scatter has no shadow volume and uses the map.
     pub surface_shadows: SurfaceShadows,
+    /// How VSV frames keep their shadow volume ([`ShadowVolume`]; the Cartesian grid's frames
+    /// and those with grid surface shadows always keep bits).
+    pub shadow_volume: ShadowVolume,
     /// The list capacity [`ExactShadows`] needs, grown when a frame's triangles overflowed it (0:
     /// none asked yet).
     exact_capacity: u32,
@@ -560,7 +623,8 @@ pub struct Renderer {
     timer: Option<GpuTimer<Pass>>,
     geometry: Option<Geometry>,
     targets: Option<Targets>,
-    grid: Option<(Grid, wgpu::Buffer)>,
+    /// The shadow volume's buffer: of the grid's bits or its first hits ([`ShadowVolume`]).
+    grid: Option<(Grid, ShadowVolume, wgpu::Buffer)>,
     /// Per plane of the grid, the ray cells its pixels read ([`GridMapping::plane_rays`]), which
     /// bound Voxelize and Scan; made with the grid, written when what it is computed from
     /// changes: what it holds was computed from that key, and keeps that share of the cells
@@ -625,6 +689,7 @@ impl Renderer {
             shape_shadow_map: true,
             clear_kept_cells,
             surface_shadows: SurfaceShadows::default(),
+            shadow_volume: ShadowVolume::default(),
             exact_capacity: 0,
             exact_first_capacity: None,
             adaptive_pixels: true,
@@ -856,14 +921,21 @@ impl Renderer {
         Ok(())
     }
 
-    fn ensure_grid(&mut self, grid: Grid) -> Result<(), GpuError> {
-        if self.grid.as_ref().is_some_and(|(g, _)| *g == grid) {
+    fn ensure_grid(&mut self, grid: Grid, volume: ShadowVolume) -> Result<(), GpuError> {
+        if self.grid.as_ref().is_some_and(|(g, v, _)| *g == grid && *v == volume) {
             return Ok(());
         }
-        self.ctx.check_buffer(&format!("the {grid} grid"), grid.bytes(), "use fewer planes, rays or bins")?;
+        let (what, fix) = match volume {
+            ShadowVolume::Bits => (format!("the {grid} grid"), "use fewer planes, rays or bins"),
+            ShadowVolume::FirstHits => (format!("the {grid} grid's first hits"), "use fewer planes or bins"),
+        };
+        self.ctx.check_buffer(&what, volume.bytes(&grid), fix)?;
         let bits = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Renderer::grid_bits"),
-            size: grid.bytes(),
+            label: Some(match volume {
+                ShadowVolume::Bits => "Renderer::grid_bits",
+                ShadowVolume::FirstHits => "Renderer::grid_first_hits",
+            }),
+            size: volume.bytes(&grid),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -873,10 +945,10 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        self.grid = Some((grid, bits));
+        self.grid_written = whole_range(bits.size());
+        self.grid = Some((grid, volume, bits));
         self.plane_rays = Some((plane_rays, None));
         // (A new buffer is all zeros: nothing is left to hide.)
-        self.grid_written = whole_range(grid.bytes());
         self.geometry_copy = None;
         self.stale_bindings = true;
         Ok(())
@@ -884,7 +956,7 @@ impl Renderer {
 
     /// Makes every pass's bind groups for the current resources (after any of them changed).
     fn rebind(&mut self) {
-        let (Some(geometry), Some(t), Some((_, bits)), Some((plane_rays, _))) =
+        let (Some(geometry), Some(t), Some((_, _, bits)), Some((plane_rays, _))) =
             (&self.geometry, &self.targets, &self.grid, &self.plane_rays)
         else {
             return;
@@ -912,6 +984,7 @@ impl Renderer {
             plane_rays: plane_rays.as_entire_binding(),
         };
         p.scan.bind(d, scan);
+        p.hit_bounds.bind(d, HitBoundsBindings { frame_in: frame(), volume: bits.as_entire_binding() });
         p.scatter_table.bind(d, &self.frame_buffer);
         let integrate = IntegrateInputs {
             frame_in: frame(),
@@ -957,11 +1030,12 @@ impl Renderer {
     fn prepare(&mut self, scene: &Scene, width: u32, height: u32, method: Method) -> Result<Prepared, RenderError> {
         self.ensure_geometry(scene)?;
         self.ensure_targets(width, height)?;
-        self.ensure_grid(scene.grid)?;
-        if self.keep_geometry && self.geometry_copy.is_none() {
+        let volume = self.volume_of(scene, method);
+        self.ensure_grid(scene.grid, volume)?;
+        if self.keep_geometry && self.geometry_copy.as_ref().is_none_or(|c| c.size() != volume.bytes(&scene.grid)) {
             self.geometry_copy = Some(self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("Renderer::geometry_copy"),
-                size: scene.grid.bytes(),
+                size: volume.bytes(&scene.grid),
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }));
@@ -1111,7 +1185,7 @@ impl Renderer {
         let eye = &self.passes.eye_pyramid;
         let eye_levels = if eye_key.is_some() && eye.built_from == eye_key { eye.bound_coarsest() } else { 0 };
         let eye_build = if eye.built_from == eye_key { None } else { eye_key };
-        (glam::UVec4::new(v.items_per_thread, v.words_per_item, levels, eye_levels), build, eye_build)
+        (glam::UVec4::new(v.run_for(&setup.mapping.grid), v.words_per_item, levels, eye_levels), build, eye_build)
     }
 
     /// The shader variant of a frame set up as `setup` ([`FrameSetup::variant`]), with this
@@ -1141,6 +1215,10 @@ impl Renderer {
         let fits = self.geometry.as_ref().is_some_and(|g| {
             g.gpu.whole_triangles().is_some() && ExactShadows::fits(g.gpu.triangle_count, self.ctx.max_binding())
         });
+        let voxels = setup.method == Method::Vsv && scene.needs_scattering();
+        if voxels && self.volume_of(scene, setup.method) == ShadowVolume::FirstHits {
+            setup.uniforms.image.w |= frame::FLAG_FIRST_HITS;
+        }
         if self.surface_shadows == SurfaceShadows::Exact
             && fits
             && !setup.frame.is_point()
@@ -1148,6 +1226,20 @@ impl Renderer {
             && matches!(setup.method, Method::Vsv | Method::Cartesian)
         {
             setup.uniforms.image.w |= frame::FLAG_EXACT_SHADOWS;
+        }
+    }
+
+    /// The shadow volume's buffer a frame of `scene` with `method` binds: the bits for the
+    /// Cartesian grid and for VSV with grid surface shadows (Integrate's surface test reads ray
+    /// cells), else [`Renderer::shadow_volume`]'s (a frame with no volume to make, the march's or
+    /// one with nothing to scatter, keeps it too, so that switching methods allocates nothing).
+    fn volume_of(&self, scene: &Scene, method: Method) -> ShadowVolume {
+        let grid_shadows =
+            method == Method::Vsv && scene.needs_scattering() && self.surface_shadows == SurfaceShadows::Grid;
+        if method == Method::Cartesian || grid_shadows {
+            ShadowVolume::Bits
+        } else {
+            self.shadow_volume
         }
     }
 
@@ -1162,7 +1254,7 @@ impl Renderer {
         let same_resources = !self.stale_bindings
             && self.geometry.as_ref().is_some_and(|g| g.fingerprint == fingerprint)
             && self.targets.as_ref().is_some_and(|t| (t.width, t.height) == (width, height))
-            && self.grid.as_ref().is_some_and(|(g, _)| *g == scene.grid)
+            && self.grid.as_ref().is_some_and(|(g, v, _)| *g == scene.grid && *v == self.volume_of(scene, method))
             && (!self.keep_geometry || self.geometry_copy.is_some());
         if !self.reuse_unchanged || !same_resources {
             return false;
@@ -1231,7 +1323,7 @@ impl Renderer {
             eye_runs = g.gpu.draw_runs(&eye_facing);
             self.passes.surface.update_runs(&self.ctx.queue, &eye_runs);
         }
-        let (Some(geometry), Some(t), Some((_, bits))) = (&self.geometry, &self.targets, &self.grid) else {
+        let (Some(geometry), Some(t), Some((grid, _, bits))) = (&self.geometry, &self.targets, &self.grid) else {
             unreachable!("prepare made them")
         };
         let (p, queue, size) = (&self.passes, &self.ctx.queue, (width, height));
@@ -1304,7 +1396,12 @@ impl Renderer {
                         p.ranges.record(&mut f.enc, v, &self.frame_buffer, width, height);
                         f.mark(Pass::Ranges);
                     }
-                    if self.clear_kept_cells {
+                    let first_hits = setup.first_hits();
+                    if first_hits {
+                        // The keys only: HitBounds writes every bound.
+                        f.enc.clear_buffer(bits, 0, Some(HitBounds::key_bytes(grid)));
+                        self.grid_written = whole_range(bits.size());
+                    } else if self.clear_kept_cells {
                         for r in self.kept_bytes.iter() {
                             f.enc.clear_buffer(bits, r.start, Some(r.end - r.start));
                         }
@@ -1316,7 +1413,7 @@ impl Renderer {
                     p.cull.begin_frame(&mut f.enc);
                     // Chunks of triangles (one unless the mesh is huge) share the Cull pass's lists.
                     for chunk in 0..p.cull.chunks() {
-                        p.cull.record(&mut f.enc, v, chunk, p.voxelize.items_per_thread);
+                        p.cull.record(&mut f.enc, v, chunk, setup.uniforms.work.x);
                         f.mark(Pass::Cull);
                         p.voxelize.record(&mut f.enc, v, chunk, &p.cull.dispatch);
                         f.mark(Pass::Voxelize);
@@ -1324,10 +1421,15 @@ impl Renderer {
                     if let (true, Some(copy)) = (self.keep_geometry, &self.geometry_copy) {
                         f.enc.copy_buffer_to_buffer(bits, 0, copy, 0, bits.size());
                     }
-                    // (The frame's own grid: planes in x; Scan uses it on quad grids.)
-                    let planes = self.scan_columns.then_some(setup.uniforms.grid.x);
-                    p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, planes);
-                    f.mark(Pass::Scan);
+                    if first_hits {
+                        p.hit_bounds.record(&mut f.enc, grid);
+                        f.mark(Pass::HitBounds);
+                    } else {
+                        // (The frame's own grid: planes in x; Scan uses it on quad grids.)
+                        let planes = self.scan_columns.then_some(setup.uniforms.grid.x);
+                        p.scan.record(&mut f.enc, &p.cull.dispatch, Cull::SCAN_ARGS, v.quad_rays, planes);
+                        f.mark(Pass::Scan);
+                    }
                 }
                 if setup.frame.is_point() && method == Method::Vsv {
                     p.scatter_table.record(&mut f.enc, v);
@@ -1544,9 +1646,24 @@ impl Renderer {
 
     /// The shadow volume of the last frame, `planes x rays x words` words (plane-major: ray
     /// (`plane`, `ray`) starts at [`Grid::ray_offset`]), for the inspector and tests.
+    /// A first-hit frame's volume reads as the layers it stands for
+    /// ([`hit_bounds::first_hits_as_bits`]).
     pub fn read_grid(&self) -> Result<Vec<u32>, GpuError> {
-        let (_, bits) = self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
-        Ok(self.zero_unwritten(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(bits)?)))
+        let (grid, volume, bits) =
+            self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(bits)?);
+        match volume {
+            ShadowVolume::Bits => Ok(self.zero_unwritten(words)),
+            ShadowVolume::FirstHits => self.first_hits_as_bits(&words, grid, false),
+        }
+    }
+
+    /// A first-hit volume's keys as the bits' layers, under the last frame's mapping.
+    fn first_hits_as_bits(&self, keys: &[u32], grid: &Grid, geometry: bool) -> Result<Vec<u32>, GpuError> {
+        let Some((_, Some((key, _)))) = &self.plane_rays else {
+            return Err(GpuError::Readback("no frame rendered yet".into()));
+        };
+        Ok(hit_bounds::first_hits_as_bits(keys, grid, &key.mapping, geometry))
     }
 
     /// `words` (the grid or its geometry copy) with every word outside the last voxelizing frame's
@@ -1574,13 +1691,18 @@ impl Renderer {
         }
     }
 
-    /// The geometry voxels of the last frame (before the scan), laid out as [`Renderer::read_grid`];
-    /// needs [`Renderer::set_keep_geometry_grid`] before that frame.
+    /// The geometry voxels of the last frame (before the scan), laid out as [`Renderer::read_grid`]
+    /// (of a first-hit frame, each light ray's first hit alone); needs
+    /// [`Renderer::set_keep_geometry_grid`] before that frame.
     pub fn read_geometry_grid(&self) -> Result<Vec<u32>, GpuError> {
         let b = self.geometry_copy.as_ref().filter(|_| self.keep_geometry).ok_or_else(|| {
             GpuError::Readback("the geometry grid is not kept (Renderer::set_keep_geometry_grid)".into())
         })?;
-        Ok(self.zero_unwritten(bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(b)?)))
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(b)?);
+        match &self.grid {
+            Some((grid, ShadowVolume::FirstHits, _)) => self.first_hits_as_bits(&words, grid, true),
+            _ => Ok(self.zero_unwritten(words)),
+        }
     }
 
     /// Uploads raw grid words (tests use it to check the scan in isolation).
@@ -1797,6 +1919,7 @@ mod binding_tests {
         check("scan.wgsl", ScanBindings::SLOTS);
         check("scan_words.wgsl", ScanBindings::SLOTS);
         check("scan_columns.wgsl", ScanBindings::SLOTS);
+        check("hit_bounds.wgsl", HitBoundsBindings::SLOTS);
         check("scatter_table.wgsl", ScatterTableBindings::SLOTS);
         check("integrate.wgsl", IntegrateBindings::SLOTS);
         check("raymarch.wgsl", RaymarchBindings::SLOTS);
@@ -1810,7 +1933,7 @@ mod binding_tests {
     /// `render`). Only the shadow map's per-face matrices stay uniform (they steer nothing).
     #[test]
     fn only_the_shadow_map_faces_are_uniform_buffers() {
-        let passes: [(&str, &[(&str, Kind)]); 16] = [
+        let passes: [(&str, &[(&str, Kind)]); 17] = [
             ("shadow_map.wgsl", ShadowMapBindings::SLOTS),
             ("shadow_cull.wgsl", ShadowCullBindings::SLOTS),
             ("surface.wgsl", SurfaceBindings::SLOTS),
@@ -1822,6 +1945,7 @@ mod binding_tests {
             ("scan.wgsl", ScanBindings::SLOTS),
             ("scan_words.wgsl", ScanBindings::SLOTS),
             ("scan_columns.wgsl", ScanBindings::SLOTS),
+            ("hit_bounds.wgsl", HitBoundsBindings::SLOTS),
             ("scatter_table.wgsl", ScatterTableBindings::SLOTS),
             ("integrate.wgsl", IntegrateBindings::SLOTS),
             ("raymarch.wgsl", RaymarchBindings::SLOTS),

@@ -23,6 +23,8 @@ pub enum Pass {
     Voxelize,
     /// The prefix OR along the rays: the shadow volume.
     Scan,
+    /// The first-hit volume's bounds per word of bins (in place of Scan in a first-hit frame).
+    HitBounds,
     /// The cumulative unshadowed in-scattering (point lights).
     ScatterTable,
     /// Per-pixel single scattering over the lit runs.
@@ -39,7 +41,7 @@ pub enum Pass {
 impl Pass {
     /// The passes before the volume's integration (Integrate or Raymarch): a frame whose inputs to
     /// them did not change takes their results from the last frame (`Renderer::reuse_unchanged`).
-    pub const BEFORE_VOLUME: [Pass; 8] = [
+    pub const BEFORE_VOLUME: [Pass; 9] = [
         Pass::Surface,
         Pass::ShadowFit,
         Pass::ShadowMap,
@@ -48,9 +50,10 @@ impl Pass {
         Pass::Cull,
         Pass::Voxelize,
         Pass::Scan,
+        Pass::HitBounds,
     ];
     /// Every pass, in frame order.
-    pub const ALL: [Pass; 13] = [
+    pub const ALL: [Pass; 14] = [
         Pass::Surface,
         Pass::ShadowFit,
         Pass::ShadowMap,
@@ -59,6 +62,7 @@ impl Pass {
         Pass::Cull,
         Pass::Voxelize,
         Pass::Scan,
+        Pass::HitBounds,
         Pass::ScatterTable,
         Pass::Integrate,
         Pass::Raymarch,
@@ -78,6 +82,7 @@ impl Pass {
             Pass::Cull => "cull",
             Pass::Voxelize => "voxelize",
             Pass::Scan => "scan",
+            Pass::HitBounds => "hit_bounds",
             Pass::ScatterTable => "scatter_table",
             Pass::Integrate => "integrate",
             Pass::Raymarch => "raymarch",
@@ -94,7 +99,13 @@ impl Pass {
     pub fn is_voxel(self) -> bool {
         matches!(
             self,
-            Pass::Ranges | Pass::ShadowPyramid | Pass::Cull | Pass::Voxelize | Pass::Scan | Pass::ScatterTable
+            Pass::Ranges
+                | Pass::ShadowPyramid
+                | Pass::Cull
+                | Pass::Voxelize
+                | Pass::Scan
+                | Pass::HitBounds
+                | Pass::ScatterTable
         )
     }
 }

@@ -2,7 +2,7 @@
 //! phase function, whether the medium is grey, the grid's axes or (Integrate) whether its rays start
 //! on four words builds one pipeline per combination a frame actually uses, with the WGSL
 //! pipeline-overridable constants `POINT_LIGHT`, `PHASE`, `GREY_MEDIUM`, `CARTESIAN`, `COSINE_BINS`,
-//! `QUAD_RAYS`, `GRID_SHADOWS`, `WHOLE_RAY_ITEMS` and `EXACT_SHADOWS` (`shaders/common.wgsl`) set. The shader
+//! `QUAD_RAYS`, `GRID_SHADOWS`, `WHOLE_RAY_ITEMS`, `EXACT_SHADOWS` and `FIRST_HITS` (`shaders/common.wgsl`) set. The shader
 //! compiler then folds the branches on them away when it builds the pipeline, instead of every
 //! pixel taking them at run time. (On llvmpipe a branch on a value read from a buffer runs both
 //! sides for every pixel: a grey-medium test made at run time saved nothing, the same test as a
@@ -52,6 +52,9 @@ pub struct Variant {
     /// `psi` range from a triangle's bounding ball, which costs it one angle instead of six and no
     /// item (triangle_bounds.wgsl). Only the item passes' pipelines (Cull, Voxelize) depend on it.
     pub whole_ray_items: bool,
+    /// The frame keeps its shadow volume as each light ray's first hit
+    /// ([`super::ShadowVolume::FirstHits`]): Voxelize's and Integrate's pipelines depend on it.
+    pub first_hits: bool,
 }
 
 impl Variant {
@@ -69,6 +72,7 @@ impl Variant {
             grid_shadows: false,
             exact_shadows: false,
             whole_ray_items: false,
+            first_hits: false,
         }
     }
 
@@ -98,9 +102,14 @@ impl Variant {
         Variant { whole_ray_items, ..self }
     }
 
+    /// The same variant for a frame whose shadow volume is (or is not) its light rays' first hits.
+    pub fn with_first_hits(self, first_hits: bool) -> Variant {
+        Variant { first_hits, ..self }
+    }
+
     /// The values of the WGSL `override` constants, as wgpu takes them. Every module imports
     /// `common.wgsl`, which declares them all, so the names always exist.
-    pub fn constants(&self) -> [(&'static str, f64); 9] {
+    pub fn constants(&self) -> [(&'static str, f64); 10] {
         let b = |v: bool| if v { 1.0 } else { 0.0 };
         [
             ("POINT_LIGHT", b(self.point_light)),
@@ -112,6 +121,7 @@ impl Variant {
             ("GRID_SHADOWS", b(self.grid_shadows)),
             ("WHOLE_RAY_ITEMS", b(self.whole_ray_items)),
             ("EXACT_SHADOWS", b(self.exact_shadows)),
+            ("FIRST_HITS", b(self.first_hits)),
         ]
     }
 
@@ -169,6 +179,12 @@ impl Specialised {
         matches!(self, Specialised::LightAndSurfaceShadows | Specialised::LightGridAndSurfaceShadows | Specialised::All)
     }
 
+    /// Whether the pass builds a pipeline of its own for a first-hit volume
+    /// ([`Variant::first_hits`]): the passes that write and read it (Voxelize, Integrate).
+    fn reads_volume(self) -> bool {
+        matches!(self, Specialised::LightGridAndSurfaceShadows | Specialised::All)
+    }
+
     /// Whether the pass builds a pipeline of its own for a work list of whole-ray items
     /// ([`Variant::whole_ray_items`]): the passes that make and take the items (Cull, Voxelize).
     fn reads_item_layout(self) -> bool {
@@ -195,7 +211,9 @@ impl<P> VariantPipelines<P> {
         let grid_shadows = v.grid_shadows && self.reads.reads_surface_shadows();
         let exact_shadows = v.exact_shadows && self.reads == Specialised::LightAndSurfaceShadows;
         let whole_ray_items = v.whole_ray_items && self.reads.reads_item_layout();
-        let v = Variant { whole_ray_items, exact_shadows, ..v };
+        // (Cull shares Voxelize's `Specialised`, and with it a pipeline of its own for first hits.)
+        let first_hits = v.first_hits && self.reads.reads_volume();
+        let v = Variant { whole_ray_items, exact_shadows, first_hits, ..v };
         let v_any_rays = Variant { quad_rays: true, grid_shadows, ..v };
         let epipolar = Variant { cartesian: false, cosine_bins: false, ..v_any_rays };
         match self.reads {
@@ -221,16 +239,17 @@ impl<P> VariantPipelines<P> {
                 (false, false) => "",
             };
             let items = if key.whole_ray_items { ", whole-ray items" } else { "" };
+            let volume = if key.first_hits { ", first hits" } else { "" };
             let label = match self.reads {
                 Specialised::Light | Specialised::LightAndSurfaceShadows => format!("[{light}{shadows}]"),
                 Specialised::LightAndGrid | Specialised::LightGridAndSurfaceShadows => {
-                    format!("[{light}{}{shadows}{items}]", key.grid_name())
+                    format!("[{light}{}{shadows}{items}{volume}]", key.grid_name())
                 }
                 Specialised::LightAndPhase | Specialised::LightPhaseAndMedium => format!("[{key}]"),
                 // Only Integrate tells the grid's ray alignment and the surface shadows apart
                 // (implementation details, so not in the variant's name).
                 Specialised::All => {
-                    format!("[{key}{}{shadows}]", if key.quad_rays { "" } else { ", rays off four words" })
+                    format!("[{key}{}{shadows}{volume}]", if key.quad_rays { "" } else { ", rays off four words" })
                 }
             };
             let p = build(&key.constants(), &label);
@@ -442,7 +461,8 @@ mod tests {
                         ("QUAD_RAYS", 1.0),
                         ("GRID_SHADOWS", 0.0),
                         ("WHOLE_RAY_ITEMS", 0.0),
-                        ("EXACT_SHADOWS", 0.0)
+                        ("EXACT_SHADOWS", 0.0),
+                        ("FIRST_HITS", 0.0)
                     ]
                 )
             });
@@ -461,6 +481,29 @@ mod tests {
         });
         assert_eq!(labels, ["[point light, cosine bins]"]);
         assert_eq!(sun.with_grid(true, false).to_string(), "directional light, isotropic, grey medium, cartesian grid");
+    }
+
+    /// A first-hit frame builds pipelines of its own for the passes that write and read the volume
+    /// (Voxelize and Cull, which share a `Specialised`, and Integrate), and shares every other
+    /// pass's with the bits' frames.
+    #[test]
+    fn first_hits_specialise_only_the_volumes_passes() {
+        let sun = Variant::new(false, &Phase::Isotropic, GREY);
+        for (reads, own) in [
+            (Specialised::LightGridAndSurfaceShadows, true),
+            (Specialised::All, true),
+            (Specialised::LightAndGrid, false),
+            (Specialised::LightAndSurfaceShadows, false),
+            (Specialised::LightPhaseAndMedium, false),
+        ] {
+            let mut m = VariantPipelines::new(reads);
+            m.prepare(sun, |c, _| assert_eq!(c[9], ("FIRST_HITS", 0.0)));
+            m.prepare(sun.with_first_hits(true), |c, l| {
+                assert_eq!(c[9], ("FIRST_HITS", 1.0));
+                assert!(l.contains("first hits"), "{l}");
+            });
+            assert_eq!(m.variants().count(), if own { 2 } else { 1 }, "{reads:?}");
+        }
     }
 
     /// Whether the grid's rays start on four words changes Integrate's pipeline only; whether the

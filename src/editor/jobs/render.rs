@@ -606,7 +606,7 @@ impl Worker {
         let renderer = &lane.renderer;
         let prune = renderer.prune_report(&info).ok();
         // A frame that reused the last one's volume has the grids the window already holds.
-        let fresh_grids = keep && !info.reused.contains(&Pass::Scan);
+        let fresh_grids = keep && !info.reused.iter().any(|p| matches!(p, Pass::Scan | Pass::HitBounds));
         let grids = fresh_grids.then(|| renderer.read_grid().ok()).flatten().map(|shadow| {
             let geometry = renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4);
             let tracer = match &self.tracer {

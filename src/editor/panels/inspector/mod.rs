@@ -134,7 +134,8 @@ impl Panel for InspectorPanel {
         }
         // A full frame that reused the volume of the one before shows the same grid.
         let older = cx.jobs.render.shown.as_ref().is_some_and(|p| {
-            p.generation != s.generation && !(p.quality.is_full() && p.info.reused.contains(&Pass::Scan))
+            p.generation != s.generation
+                && !(p.quality.is_full() && p.info.reused.iter().any(|p| matches!(p, Pass::Scan | Pass::HitBounds)))
         });
         if older {
             ui.label(egui::RichText::new("(the grid of the last full-quality frame)").small().weak());
