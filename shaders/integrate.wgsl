@@ -352,12 +352,12 @@ var<private> pixel_key: u32;
 // blends two planes whose copies of its view ray pass a closed surface's silhouette apart: where
 // the pixel's own ray passes outside a box around the light, its copy in a neighbouring plane may
 // graze the box's inside, lit, and its light rays leave the box just past the pixel's angle. The
-// bits' ray cells hid that (a hit in the pixel's own cell shadows it: up to a cell, 4 planes'
-// worth at the default grid); exact first hits let it through along silhouettes (the tessellated
-// box of tests/watertight.rs: 1 pixel at the default grid, 2% of the light at 64x64x32). Half a
-// plane (sin(gamma) dphi / 2, the displacement of a neighbour's light ray across the view ray,
-// own_shadow_start, over the distance) stops it at a cost of 0.016% of the classroom's 0.740%
-// (docs/results.md, session 47).
+// bits' ray cells hid that (a hit in the pixel's own cell shadows it: up to a cell, several
+// planes' worth); exact first hits let it through along silhouettes (the tessellated box of
+// tests/watertight.rs: 1 pixel at the default grid, 2% of the light at 64x64x32). Half a plane's
+// angle (sin(gamma) dphi / 2: a neighbour plane's displacement across the view ray, as in
+// own_shadow_start, over the distance) stops it at the default grid and leaves 1.26% there; it
+// takes the classroom from 0.740% to 0.756% off the reference (docs/results.md, session 47).
 const HIT_SLACK: f32 = 0.5;
 
 fn pixel_key_of(gamma: f32) -> u32 {
@@ -395,7 +395,12 @@ fn hit_quad(base: u32, g: u32) -> vec4u {
     let hi = grid[at + 1u];
     let key = vec4u(pixel_key);
     let mixed = lo <= key & hi > key;
-    let built = vec4u(hit_bits(i, mixed.x), hit_bits(i + 1u, mixed.y), hit_bits(i + 2u, mixed.z), hit_bits(i + 3u, mixed.w));
+    let built = vec4u(
+        hit_bits(i, mixed.x),
+        hit_bits(i + 1u, mixed.y),
+        hit_bits(i + 2u, mixed.z),
+        hit_bits(i + 3u, mixed.w),
+    );
     return select(select(vec4u(0u), vec4u(~0u), lo > key), built, mixed);
 }
 

@@ -8,22 +8,24 @@
 //   geometry[x, y, k] = 1   where light ray (phi_x, z_k) meets it at an angle gamma in ray cell y
 //
 // (every hit, not only the first, so the inspector's geometry layer shows the surfaces; of a solid
-// the light lies outside of, only the faces toward the light, which Cull keeps). With FIRST_HITS
-// (the default volume, `first_hits` below) each light ray keeps instead the least angle it meets a
-// triangle at, volume[x, k] = max over hits of hit_key(gamma) (common.wgsl), no ray cell at all. The rays
-// y stay binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the
-// same cell but in front of the caster is shadowed too: a bias of at most one ray cell toward the
-// light (Integrate reads the pixel's own ray cell, so it never leaks through a closed surface).
+// the light lies outside of, only the faces toward the light, which Cull keeps). The rays y stay
+// binned: a hit marks the cell that holds its gamma, so after the scan a receiver in the same cell
+// but in front of the caster is shadowed too: a bias of at most one ray cell toward the light
+// (Integrate reads the pixel's own ray cell, so it never leaks through a closed surface). With
+// FIRST_HITS (the default volume, `first_hits` below) each light ray keeps instead the least
+// angle a triangle meets it at, volume[x, k] = max over its hits of hit_key(gamma) (common.wgsl):
+// no ray cell at all.
 //
 // Work comes from the Cull pass's list, one item per triangle, plane and group of f.work.y 32-bit
 // words of bins (one word on a GPU, all of them on a CPU, where a plane's set-up costs more than
-// its bins); a thread takes a run of items (one on a GPU, 64 on a CPU, every LANES-th of a stretch
-// shared with its SIMD group: main, below); the items in the blocks of a large triangle's planes
-// that Cull found hidden from the sun are skipped (`hidden`). In the plane, the triangle is a
-// segment (its edges' crossings of the plane, plane_segment.wgsl); along a segment z and gamma are
-// both monotonic, so the bins whose centre z lies in the segment's z range are exactly the light
-// rays that hit it, and the hit of each follows in closed form; where the first and the last hit
-// fall in one ray cell, so do all between, and the bins are set a word at a time.
+// its bins); a thread takes a run of items (one on a GPU, up to 64 on a CPU, Voxelize::run_for;
+// every LANES-th of a stretch shared with its SIMD group: main, below); the items in the blocks
+// of a large triangle's planes that Cull found hidden from the sun are skipped (`hidden`). In the
+// plane, the triangle is a segment (its edges' crossings of the plane, plane_segment.wgsl); along
+// a segment z and gamma are both monotonic, so the bins whose centre z lies in the segment's z
+// range are exactly the light rays that hit it, and the hit of each follows in closed form; where
+// the first and the last hit fall in one ray cell, so do all between, and the bins are set a word
+// at a time.
 //
 // Watertight: a crossing on an edge is computed from the edge's two vertices in a canonical order,
 // so the two triangles that share the edge get the same point bit for bit; a vertex on the plane is
