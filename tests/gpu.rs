@@ -524,9 +524,7 @@ fn surface_shadows_from_the_grid_draw_no_map_and_match_the_reference() {
 fn surface_shadows_from_the_grid_never_leak_out_of_a_closed_box() {
     let Some(mut r) = renderer() else { return };
     r.surface_shadows = SurfaceShadows::Grid;
-    let mut s = epivox::check::cases::floor_scene("inside-closed-box");
-    s.light = point_light(Vec3::new(0.1, 1.1, 0.05));
-    s.meshes[1] = epivox::scene::build::cuboid("closed box", Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.4, 0.3, 0.4), false);
+    let mut s = closed_box_scene();
     for grid in [Grid::default(), Grid { planes: 128, rays: 128, bins: 32, ..Grid::default() }] {
         s.grid = grid;
         let out = r.render(&s, 128, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));

@@ -61,6 +61,15 @@ pub fn point_light(p: Vec3) -> Light {
     point(p, 10.0)
 }
 
+/// The `check` case light/inside-closed-box: a point light inside a closed box above a floor, so
+/// that nothing outside the box may be lit.
+pub fn closed_box_scene() -> Scene {
+    let mut s = epivox::check::cases::floor_scene("inside-closed-box");
+    s.light = point_light(Vec3::new(0.1, 1.1, 0.05));
+    s.meshes[1] = cuboid("closed box", Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.4, 0.3, 0.4), false);
+    s
+}
+
 /// Renders with the GPU and the reference and returns (gpu scatter, reference scatter, stats).
 pub fn against_reference(
     r: &mut Renderer,
