@@ -814,6 +814,33 @@ fn pick_surface_shadows(h: &mut Harness<'static, App>, item: &str) {
     h.run();
 }
 
+/// The Grid panel's "volume" (`Renderer::shadow_volume`): first hits by default, so the frame's
+/// passes take the hits' bounds; the panel offers both, and picking the bits renders again with
+/// the scan (the pick as the panel emits it: the panel sits below the fold of the test window).
+#[test]
+fn the_grid_panel_offers_the_shadow_volume_and_the_frame_follows_it() {
+    use epivox::render::{Pass, ShadowVolume};
+    let dir = tempfile::tempdir().unwrap();
+    let Some(mut h) = harness(options(dir.path())) else { return };
+    let _ = viewport_pixels(&mut h);
+    let shown = |h: &Harness<'static, App>| h.state().ed().shown().expect("a picture is shown").info.passes.clone();
+    let passes = shown(&h);
+    assert!(passes.contains(&Pass::HitBounds) && !passes.contains(&Pass::Scan), "{passes:?}");
+    for label in ["first-hits", "bits"] {
+        assert!(has_label_containing(&h, label), "the Grid panel offers no '{label}'");
+    }
+    h.state_mut().ed_mut().apply(Command::SetShadowVolume(ShadowVolume::Bits));
+    h.run();
+    assert_eq!(h.state().ed().shadow_volume(), ShadowVolume::Bits);
+    let _ = viewport_pixels(&mut h);
+    let passes = shown(&h);
+    assert!(passes.contains(&Pass::Scan) && !passes.contains(&Pass::HitBounds), "{passes:?}");
+    h.state_mut().ed_mut().apply(Command::SetShadowVolume(ShadowVolume::FirstHits));
+    h.run();
+    let _ = viewport_pixels(&mut h);
+    assert!(shown(&h).contains(&Pass::HitBounds));
+}
+
 /// The toolbar's "adaptive pixels" (`Renderer::adaptive_pixels`, on by default): a click renders
 /// again with every pixel integrated, and the frame says which it did; the picture stays the same
 /// to the eye (the pixels from their neighbours are within 1% of their own integrals).

@@ -367,6 +367,11 @@ impl Editor {
         self.view.surface_shadows == SurfaceShadows::Exact
     }
 
+    /// How VSV keeps its shadow volume (`Renderer::shadow_volume`).
+    pub fn shadow_volume(&self) -> crate::render::ShadowVolume {
+        self.view.shadow_volume
+    }
+
     /// Whether Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
     pub fn adaptive_pixels(&self) -> bool {
         self.view.adaptive_pixels

@@ -73,6 +73,7 @@ impl Editor {
                 }
             }
             Command::SetSurfaceShadows(from) => view.surface_shadows = from,
+            Command::SetShadowVolume(volume) => view.shadow_volume = volume,
             Command::SetAdaptivePixels(on) => view.adaptive_pixels = on,
             Command::SetRenderScale(s) => view.render_scale = s.clamp(0.1, 1.0),
             Command::SetCameraMode(m) => view.camera.mode = m,
@@ -161,6 +162,7 @@ impl Editor {
             method: view.method,
             shadow_map: view.shadow_map,
             surface_shadows: view.surface_shadows,
+            shadow_volume: view.shadow_volume,
             adaptive_pixels: view.adaptive_pixels,
             width,
             height,
@@ -191,6 +193,7 @@ impl Editor {
             method: content.method,
             shadow_map: content.shadow_map,
             surface_shadows: content.surface_shadows,
+            shadow_volume: content.shadow_volume,
             adaptive_pixels: content.adaptive_pixels,
             interactive,
             progressive: !forcing,

@@ -6,7 +6,7 @@ use super::jobs::JobEvent;
 use super::panels::inspector::InspectorMode;
 use super::view::{ExposureMode, ViewMode};
 use crate::params::{Grid, Light, Medium};
-use crate::render::{Method, SurfaceShadows};
+use crate::render::{Method, ShadowVolume, SurfaceShadows};
 use crate::scene::Camera;
 use eframe::egui;
 use std::path::PathBuf;
@@ -46,6 +46,8 @@ pub enum Command {
     SetShadowMap(u32),
     /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
     SetSurfaceShadows(SurfaceShadows),
+    /// How VSV keeps its shadow volume (`Renderer::shadow_volume`).
+    SetShadowVolume(ShadowVolume),
     /// Integrate takes pixels from their neighbours along the epipolar lines (true) or integrates
     /// every pixel (`Renderer::adaptive_pixels`).
     SetAdaptivePixels(bool),

@@ -4,7 +4,7 @@
 
 use super::camera::CameraController;
 use crate::params::Baseline;
-use crate::render::{Method, SurfaceShadows};
+use crate::render::{Method, ShadowVolume, SurfaceShadows};
 use eframe::egui;
 
 /// What the viewport shows ([`ViewMode::doc`] says it for each).
@@ -115,6 +115,8 @@ pub struct View {
     pub shadow_map: u32,
     /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
     pub surface_shadows: SurfaceShadows,
+    /// How VSV keeps its shadow volume (`Renderer::shadow_volume`).
+    pub shadow_volume: ShadowVolume,
     /// Integrate takes pixels from their neighbours along the epipolar lines, or integrates every
     /// pixel (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
@@ -136,6 +138,7 @@ impl Default for View {
             raymarch_steps: Baseline::default().steps,
             shadow_map: Baseline::default().shadow_map,
             surface_shadows: SurfaceShadows::default(),
+            shadow_volume: ShadowVolume::default(),
             adaptive_pixels: true,
             render_scale: 1.0,
             camera: CameraController::default(),

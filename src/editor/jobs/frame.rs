@@ -6,7 +6,7 @@ use crate::editor::panels::inspector::GridSnapshot;
 use crate::editor::panels::GridLimits;
 use crate::image::Image;
 use crate::params::Grid;
-use crate::render::{FrameInfo, Method, PruneReport, SurfaceShadows};
+use crate::render::{FrameInfo, Method, PruneReport, ShadowVolume, SurfaceShadows};
 use crate::scene::{Camera, Scene};
 use std::sync::Arc;
 
@@ -32,6 +32,8 @@ pub struct FrameRequest {
     pub shadow_map: u32,
     /// Where the surfaces' shadows come from (`Renderer::surface_shadows`).
     pub surface_shadows: SurfaceShadows,
+    /// How VSV keeps its shadow volume (`Renderer::shadow_volume`).
+    pub shadow_volume: ShadowVolume,
     /// Integrate takes pixels from their neighbours (`Renderer::adaptive_pixels`).
     pub adaptive_pixels: bool,
     /// The user is dragging or scrolling: previews only; the full frame when this turns false.

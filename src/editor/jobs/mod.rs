@@ -13,7 +13,7 @@ use super::command::Command;
 use super::files::{DialogPurpose, Dialogs};
 use crate::gpu::ShaderLibrary;
 use crate::image::Image;
-use crate::render::{Method, SurfaceShadows};
+use crate::render::{Method, ShadowVolume, SurfaceShadows};
 use crate::scene::{load_scene, Scene, SceneError};
 use accuracy::{AccuracyJob, AccuracyResult};
 use render::{DeviceInfo, FrameFailure, Picture, RenderEvent, RenderJob};
@@ -102,6 +102,7 @@ pub struct RenderContent {
     pub method: Method,
     pub shadow_map: u32,
     pub surface_shadows: SurfaceShadows,
+    pub shadow_volume: ShadowVolume,
     pub adaptive_pixels: bool,
     pub width: u32,
     pub height: u32,

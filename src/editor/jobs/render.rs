@@ -547,7 +547,8 @@ impl Worker {
             && full.scene_generation == Some(r.scene_generation)
             && full.keep_geometry == keeps_grids(r, Quality::Full)
             && full.renderer.shadow_map_size() == r.shadow_map
-            && full.renderer.surface_shadows == r.surface_shadows;
+            && full.renderer.surface_shadows == r.surface_shadows
+            && full.renderer.shadow_volume == r.shadow_volume;
         if !fits || !same_lane || *generation != r.scene_generation {
             return false;
         }
@@ -596,6 +597,7 @@ impl Worker {
             return fail(self, e.to_string());
         }
         lane.renderer.surface_shadows = r.surface_shadows;
+        lane.renderer.shadow_volume = r.shadow_volume;
         lane.renderer.adaptive_pixels = r.adaptive_pixels;
         let out = match lane.renderer.render(scene, width, height, r.method) {
             Ok(o) => o,

@@ -1,8 +1,9 @@
-//! The Grid panel: planes, rays, bins, bin spacing, and the memory the grid takes against what the
-//! adapter allows.
+//! The Grid panel: planes, rays, bins, bin spacing, how VSV keeps its shadow volume, and the memory
+//! the volume takes against what the adapter allows.
 
 use super::{bytes, spec_slider, Command};
 use crate::params::{BinSpacing, Grid};
+use crate::render::ShadowVolume;
 use eframe::egui;
 
 #[derive(Default)]
@@ -18,7 +19,14 @@ pub struct GridLimits {
 }
 
 impl GridPanel {
-    fn draw(&mut self, ui: &mut egui::Ui, grid: &Grid, limits: Option<GridLimits>, out: &mut Vec<Command>) {
+    fn draw(
+        &mut self,
+        ui: &mut egui::Ui,
+        grid: &Grid,
+        volume: ShadowVolume,
+        limits: Option<GridLimits>,
+        out: &mut Vec<Command>,
+    ) {
         let mut g = *grid;
         let mut changed = None;
         for (value, spec, label) in [(&mut g.planes, Grid::PLANES, "planes"), (&mut g.rays, Grid::RAYS, "rays")] {
@@ -57,7 +65,17 @@ impl GridPanel {
                 out.push(Command::SetGrid(g, k));
             }
         }
-        let need = grid.bytes();
+        let mut pick = volume;
+        ui.horizontal(|ui| {
+            ui.label("volume");
+            for kind in ShadowVolume::ALL {
+                ui.selectable_value(&mut pick, kind, kind.label()).on_hover_text(kind.doc());
+            }
+        });
+        if pick != volume {
+            out.push(Command::SetShadowVolume(pick));
+        }
+        let need = volume.bytes(grid);
         let Some(limits) = limits else {
             ui.label(egui::RichText::new(format!("{} = {}", grid, bytes(need))).small());
             return;
@@ -84,6 +102,6 @@ impl super::Panel for GridPanel {
     }
     fn show(&mut self, ui: &mut egui::Ui, cx: &super::PanelCtx<'_>, out: &mut Vec<Command>) {
         let limits = cx.jobs.render.device.as_ref().map(|d| d.limits);
-        self.draw(ui, &cx.doc.look.grid, limits, out);
+        self.draw(ui, &cx.doc.look.grid, cx.view.shadow_volume, limits, out);
     }
 }
