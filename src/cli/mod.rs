@@ -120,9 +120,9 @@ pub struct PassChoices {
     /// raymarch baseline's always come from the shadow map.
     #[arg(long, value_enum)]
     pub surface_shadows: Option<SurfaceShadows>,
-    /// How VSV keeps its shadow volume [default: bits]: `first-hits` keeps each light ray's first
-    /// hit and compares it with the pixel's own angle (no ray cells); the Cartesian grid and grid
-    /// surface shadows keep the bits.
+    /// How VSV keeps its shadow volume [default: first-hits]: `first-hits` keeps each light ray's
+    /// first hit and compares it with the pixel's own angle (no ray cells); `bits`, the paper's
+    /// voxels, which the Cartesian grid and grid surface shadows always keep.
     #[arg(long, value_enum)]
     pub volume: Option<ShadowVolume>,
     /// Which pixels VSV integrates [default: adaptive]: `all` integrates every pixel, `adaptive`

@@ -38,9 +38,8 @@ impl HitBounds {
     /// fours), and 1 KiB of slack (Integrate reads up to three words past a plane's last, which it
     /// masks: past the last plane's, they stay inside the buffer).
     pub fn volume_bytes(grid: &Grid) -> u64 {
-        let keys = grid.planes as u64 * grid.bins as u64;
         let words = grid.planes as u64 * grid.words() as u64;
-        (keys + 8 * words.div_ceil(4) + 256) * 4
+        Self::key_bytes(grid) + (8 * words.div_ceil(4) + 256) * 4
     }
 
     /// The bytes of the keys alone (the part a frame clears before Voxelize).

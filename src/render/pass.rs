@@ -95,6 +95,12 @@ impl Pass {
         Pass::ALL.into_iter().find(|p| p.label() == label)
     }
 
+    /// Whether the pass finishes the shadow volume (Scan for the bits, HitBounds for the first
+    /// hits): a frame that reused it holds the last frame's volume.
+    pub fn makes_volume(self) -> bool {
+        matches!(self, Pass::Scan | Pass::HitBounds)
+    }
+
     /// Whether the pass belongs to the voxel pipeline (skipped when nothing scatters).
     pub fn is_voxel(self) -> bool {
         matches!(

@@ -24,7 +24,7 @@ use crate::editor::display::{DisplayImages, DisplayPipeline};
 use crate::editor::panels::inspector::GridSnapshot;
 use crate::editor::panels::GridLimits;
 use crate::gpu::{GpuContext, ShaderLibrary};
-use crate::render::{Method, Pass, Renderer, Variant};
+use crate::render::{Method, Renderer, Variant};
 use crate::scene::Scene;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -608,7 +608,7 @@ impl Worker {
         let renderer = &lane.renderer;
         let prune = renderer.prune_report(&info).ok();
         // A frame that reused the last one's volume has the grids the window already holds.
-        let fresh_grids = keep && !info.reused.iter().any(|p| matches!(p, Pass::Scan | Pass::HitBounds));
+        let fresh_grids = keep && !info.reused.iter().any(|p| p.makes_volume());
         let grids = fresh_grids.then(|| renderer.read_grid().ok()).flatten().map(|shadow| {
             let geometry = renderer.read_geometry_grid().ok().filter(|g| g.len() as u64 == grid.bytes() / 4);
             let tracer = match &self.tracer {

@@ -10,7 +10,7 @@ pub use pictures::{GridSnapshot, InspectorMode};
 use super::{Command, Panel, PanelCtx};
 use crate::editor::display::{FlatPicture, PictureCallback, PictureSlot};
 use crate::editor::jobs::render::INSPECT_LIMIT;
-use crate::render::{Method, Pass};
+use crate::render::Method;
 use eframe::egui;
 use eframe::egui_wgpu;
 use pictures::{export_png, grid_image, slice_image, surface_bins};
@@ -134,8 +134,7 @@ impl Panel for InspectorPanel {
         }
         // A full frame that reused the volume of the one before shows the same grid.
         let older = cx.jobs.render.shown.as_ref().is_some_and(|p| {
-            p.generation != s.generation
-                && !(p.quality.is_full() && p.info.reused.iter().any(|p| matches!(p, Pass::Scan | Pass::HitBounds)))
+            p.generation != s.generation && !(p.quality.is_full() && p.info.reused.iter().any(|p| p.makes_volume()))
         });
         if older {
             ui.label(egui::RichText::new("(the grid of the last full-quality frame)").small().weak());
