@@ -27,7 +27,7 @@
 //
 // With the first-hit volume (FIRST_HITS, the default) the words are made per pixel: bin k's bit is
 // set where its light ray's first hit comes before the pixel's own angle (hit_word), from each
-// word's bounds where they settle it; the walk over boundaries is the same.
+// word's bounds or its middle gap where they settle it; the walk over boundaries is the same.
 //
 // By default not every pixel is integrated: along an epipolar line a pixel whose two neighbours
 // on the line agree takes their mean ("pixels from their neighbours", below).
@@ -342,7 +342,9 @@ fn word(i: u32) -> u32 {
 // its words of bins (ray x starts at word x * words): word i = x * words + j has bin 32 j + b's
 // bit set where that light ray's first hit lies before the pixel's own angle, compared exactly
 // (no ray cell). A word whose 32 keys all lie on one side of the pixel's is read from its bounds
-// alone (hit_bounds.wgsl): most of them, as most words hold no shadow boundary.
+// alone (hit_bounds.wgsl): most of them, as most words hold no shadow boundary. Of the others, a
+// word whose keys split into two groups with the pixel's key between them (a shadow's edge: a near
+// caster's light rays beside a far surface's) is read from its mask; only the rest compare keys.
 
 // hit_key of the pixel's gamma moved HIT_SLACK planes' angle on (set per pixel before its walk,
 // `pixel_key_of`).
@@ -376,32 +378,50 @@ fn hit_bits(i: u32, mixed: bool) -> u32 {
     return bits;
 }
 
-// Word i from its bounds (hit_bounds.wgsl, by fours past the keys), or from its keys where the
-// pixel's key lies between them.
+// Where the bounds of word i start, in vectors: five a group of four words past the keys
+// (hit_bounds.wgsl), least keys, greatest keys, then the middle gap's lower and upper keys and mask.
+fn bounds_at(i: u32) -> u32 {
+    return (f.grid.x * f.grid.z) / 4u + 5u * (i / 4u);
+}
+
+// Word i from its bounds, or from its gap's mask where the pixel's key lies in the gap, or from
+// its keys.
 fn hit_word(i: u32) -> u32 {
-    let at = (f.grid.x * f.grid.z) / 4u + 2u * (i / 4u);
-    let lo = pick(grid[at], i % 4u);
-    let hi = pick(grid[at + 1u], i % 4u);
-    let mixed = lo <= pixel_key && hi > pixel_key;
-    return select(select(0u, ~0u, lo > pixel_key), hit_bits(i, mixed), mixed);
+    let at = bounds_at(i);
+    let c = i % 4u;
+    let lo = pick(grid[at], c);
+    let hi = pick(grid[at + 1u], c);
+    let gap = pick(grid[at + 2u], c) <= pixel_key && pick(grid[at + 3u], c) > pixel_key;
+    let mixed = lo <= pixel_key && hi > pixel_key && !gap;
+    let settled = select(select(0u, ~0u, lo > pixel_key), pick(grid[at + 4u], c), gap);
+    return select(settled, hit_bits(i, mixed), mixed);
 }
 
 // Words 4g to 4g + 3 of the plane whose words start at `base` (they come in fours, QUAD_RAYS):
-// their bounds as two vectors, the keys only of the words the pixel's key splits.
+// their bounds as two vectors; where the pixel's key lies between a word's bounds, its gap (three
+// vectors more, read only where some lane needs them: a loop of 1 or 0 steps); the keys only of
+// the words neither settles.
 fn hit_quad(base: u32, g: u32) -> vec4u {
     let i = base + 4u * g;
-    let at = (f.grid.x * f.grid.z) / 4u + 2u * (i / 4u);
+    let at = bounds_at(i);
     let lo = grid[at];
     let hi = grid[at + 1u];
     let key = vec4u(pixel_key);
-    let mixed = lo <= key & hi > key;
+    let split = lo <= key & hi > key;
+    var gap = vec4<bool>(false);
+    var gap_mask = vec4u(0u);
+    for (var t = 0u; t < select(0u, 1u, any(split)); t++) {
+        gap = split & grid[at + 2u] <= key & grid[at + 3u] > key;
+        gap_mask = grid[at + 4u];
+    }
+    let mixed = split & !gap;
     let built = vec4u(
         hit_bits(i, mixed.x),
         hit_bits(i + 1u, mixed.y),
         hit_bits(i + 2u, mixed.z),
         hit_bits(i + 3u, mixed.w),
     );
-    return select(select(vec4u(0u), vec4u(~0u), lo > key), built, mixed);
+    return select(select(select(vec4u(0u), vec4u(~0u), lo > key), gap_mask, gap), built, mixed);
 }
 
 // Words 4g to 4g + 3 of the grid ray that starts at word `base` (past its end: the next ray's,

@@ -466,8 +466,9 @@ impl std::fmt::Display for Grid {
 
 /// 2048 x 256 x 1536: 2048 planes and 1536 bins of light rays (light space, where a shadow's
 /// edge in the medium is placed) and 256 ray cells. VSV's default volume keeps each light ray's
-/// first hit ([`crate::render::ShadowVolume::FirstHits`]: 12 MiB of keys, the rays only bound the
-/// cells the pixels read); the bits (grid surface shadows, the Cartesian grid) take 96 MiB.
+/// first hit ([`crate::render::ShadowVolume::FirstHits`]: 12 MiB of keys and 2 of their words'
+/// bounds, the rays only bound the cells the pixels read); the bits (grid surface shadows, the
+/// Cartesian grid) take 96 MiB.
 /// Measured on the classroom at 512x512 against the exact reference (relative RMSE of the
 /// scattered light), llvmpipe, session 47 (docs/results.md):
 ///

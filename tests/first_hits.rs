@@ -11,7 +11,7 @@ mod common;
 
 use common::*;
 use epivox::params::{Grid, Light};
-use epivox::render::{Method, Pass, ShadowVolume, SurfaceShadows};
+use epivox::render::{Method, Pass, ShadowVolume, SurfaceShadows, WordBounds};
 use glam::Vec3;
 
 fn sun() -> Light {
@@ -96,4 +96,29 @@ fn first_hits_are_more_accurate_than_the_bits_at_the_same_grid() {
         errors.push(s.rel_rmse);
     }
     assert!(errors[1] <= errors[0] * 0.5, "first hits {} against the bits' {}", errors[1], errors[0]);
+}
+
+/// HitBounds writes each word's bounds where Integrate reads them (`WordBounds::read`, the layout
+/// by fours), the same as `WordBounds::of` its keys, and an occluder's shadow edges give words
+/// whose middle gap settles them (the keys of a near caster beside a far floor's).
+#[test]
+fn each_words_bounds_and_gap_are_those_of_its_keys() {
+    let Some(mut r) = renderer() else { return };
+    r.shadow_volume = ShadowVolume::FirstHits;
+    let mut scene = occluder_scene(sun());
+    scene.grid = Grid { planes: 256, rays: 64, bins: 256, ..Grid::default() };
+    r.render(&scene, 96, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
+    let (grid, volume, words) = r.read_volume().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((grid, volume), (scene.grid, ShadowVolume::FirstHits));
+    let mut edges = 0;
+    for i in 0..(grid.planes * grid.words()) as usize {
+        let keys: &[u32; 32] = words[32 * i..32 * i + 32].try_into().expect("32 keys a word");
+        let read = WordBounds::read(&words, &grid, i);
+        assert_eq!(read, WordBounds::of(keys), "word {i}");
+        // Hits on both sides of the gap, which leaves room for a pixel between them.
+        if read.mask != 0 && read.mask != !0 && read.above - read.below > 1 && keys.iter().all(|&k| k != 0) {
+            edges += 1;
+        }
+    }
+    assert!(edges > 0, "no word of the occluder's shadow has a gap between two groups of hits");
 }

@@ -1,11 +1,14 @@
-//! HitBounds: the least and the greatest key of each word of the first-hit volume's bins
-//! (`shaders/hit_bounds.wgsl`; [`super::ShadowVolume::FirstHits`]):
+//! HitBounds: the bounds of each word of the first-hit volume's bins
+//! (`shaders/hit_bounds.wgsl`; [`super::ShadowVolume::FirstHits`]): over the keys k_b of plane x's
+//! bins 32 j .. 32 j + 31, split at the middle key m = lo + (hi - lo) / 2,
 //!
-//!   bounds[x * words + j] = (min, max) over bins 32 j .. 32 j + 31 of plane x's first-hit keys
+//!   lo = min k_b,  hi = max k_b,  below = max { k_b <= m },  above = min { k_b > m },
+//!   mask = the bits b with k_b > m
 //!
-//! stored by fours (four words' least, then their greatest). Integrate reads a word whose keys all
-//! lie on one side of a pixel's angle from its two bounds alone. In a first-hit frame it runs
-//! where Scan runs in a bit-grid frame.
+//! stored by fours ([`WordBounds::read`]). Integrate reads a word whose keys all lie on one side of
+//! a pixel's from lo and hi alone, one whose keys the pixel's splits at the gap (below, above) from
+//! its mask, and compares the 32 keys of the others only. In a first-hit frame it runs where Scan
+//! runs in a bit-grid frame.
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::epipolar::GridMapping;
@@ -34,12 +37,12 @@ impl HitBounds {
         Ok(HitBounds { pipeline, layout, bind_group: None })
     }
 
-    /// The first-hit volume's bytes for `grid`: a key per plane and bin, two per word of bins (by
-    /// fours), and 1 KiB of slack (Integrate reads up to three words past a plane's last, which it
-    /// masks: past the last plane's, they stay inside the buffer).
+    /// The first-hit volume's bytes for `grid`: a key per plane and bin, five per word of bins
+    /// ([`WordBounds`], by fours), and 1 KiB of slack (Integrate reads up to three words past a
+    /// plane's last, which it masks: past the last plane's, they stay inside the buffer).
     pub fn volume_bytes(grid: &Grid) -> u64 {
         let words = grid.planes as u64 * grid.words() as u64;
-        Self::key_bytes(grid) + (8 * words.div_ceil(4) + 256) * 4
+        Self::key_bytes(grid) + (WordBounds::PER_FOUR * words.div_ceil(4) + 256) * 4
     }
 
     /// The bytes of the keys alone (the part a frame clears before Voxelize).
@@ -63,6 +66,61 @@ impl HitBounds {
         pass.set_bind_group(0, bind_group, &[]);
         // At most 8192 planes x 64 words (Grid's limits): 8192 workgroups, one dimension.
         pass.dispatch_workgroups((grid.planes * grid.words()).div_ceil(WORKGROUP), 1, 1);
+    }
+}
+
+/// One word's bounds (hit_bounds.wgsl): its least and greatest key, and the gap around the middle
+/// key between them, `below` and `above`, with `mask` the bits whose keys lie above it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WordBounds {
+    pub lo: u32,
+    pub hi: u32,
+    pub below: u32,
+    pub above: u32,
+    pub mask: u32,
+}
+
+impl WordBounds {
+    /// Words of bounds per group of four words of bins: five vectors, each a field of four words.
+    pub const PER_FOUR: u64 = 20;
+
+    /// The bounds HitBounds writes for a word's 32 keys.
+    pub fn of(keys: &[u32; 32]) -> WordBounds {
+        let lo = keys.iter().copied().min().unwrap_or(0);
+        let hi = keys.iter().copied().max().unwrap_or(0);
+        let mid = lo + (hi - lo) / 2;
+        let (mut below, mut above, mut mask) = (lo, hi, 0);
+        for (b, &k) in keys.iter().enumerate() {
+            if k > mid {
+                above = above.min(k);
+                mask |= 1 << b;
+            } else {
+                below = below.max(k);
+            }
+        }
+        WordBounds { lo, hi, below, above, mask }
+    }
+
+    /// Word `i`'s bounds (`i = plane * words + word`) in a first-hit volume for `grid`, as read
+    /// back (the keys, then the bounds by fours).
+    pub fn read(volume: &[u32], grid: &Grid, i: usize) -> WordBounds {
+        let at = grid.planes as usize * grid.bins as usize + Self::PER_FOUR as usize * (i / 4) + i % 4;
+        let [lo, hi, below, above, mask] = [0, 4, 8, 12, 16].map(|o| volume[at + o]);
+        WordBounds { lo, hi, below, above, mask }
+    }
+
+    /// The word's shadow bits for a pixel's `key` where its bounds settle them (bit b: bin b's
+    /// first hit comes before the pixel, its key greater), or `None` where only its keys do.
+    pub fn settle(&self, key: u32) -> Option<u32> {
+        if self.hi <= key {
+            Some(0)
+        } else if self.lo > key {
+            Some(!0)
+        } else if self.below <= key && key < self.above {
+            Some(self.mask)
+        } else {
+            None
+        }
     }
 }
 
@@ -101,6 +159,7 @@ pub fn first_hits_as_bits(keys: &[u32], grid: &Grid, mapping: &GridMapping, geom
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::strategy::Just;
 
     /// A key as Voxelize writes it (common.wgsl `hit_key`).
     fn key(gamma: f32) -> u32 {
@@ -111,6 +170,47 @@ mod tests {
     fn keys_order_angles_backward_and_no_hit_is_zero() {
         assert!(key(0.1) > key(0.2) && key(0.2) > key(3.1));
         assert!(key(std::f32::consts::PI) > 0 && key(0.0) == u32::MAX);
+    }
+
+    /// The bits a word's keys give a pixel's key (bin b shadowed where its key is greater).
+    fn exact_bits(keys: &[u32; 32], key: u32) -> u32 {
+        keys.iter().enumerate().filter(|(_, &k)| k > key).fold(0, |m, (b, _)| m | 1 << b)
+    }
+
+    proptest::proptest! {
+        /// Whatever the keys (clusters, a slope, misses), a word its bounds settle is the word its
+        /// keys give, at every pixel key near theirs.
+        #[test]
+        fn bounds_settle_a_word_only_as_its_keys_would(
+            keys in proptest::array::uniform32(proptest::prop_oneof![
+                Just(0u32), 1000u32..1100, 5000u32..5100, 0u32..=u32::MAX
+            ])
+        ) {
+            let w = WordBounds::of(&keys);
+            let probes = keys.iter().flat_map(|&k| [k.wrapping_sub(1), k, k.wrapping_add(1)]);
+            for key in probes.chain([0, u32::MAX, w.lo + (w.hi - w.lo) / 2]) {
+                if let Some(bits) = w.settle(key) {
+                    proptest::prop_assert_eq!(bits, exact_bits(&keys, key), "key {}", key);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_word_across_a_shadow_edge_settles_between_its_two_groups() {
+        // Light rays 0..12 meet a near caster (large keys: small angles), the rest a far wall.
+        let keys: [u32; 32] = std::array::from_fn(|b| if b < 12 { key(0.30 + b as f32 * 1e-3) } else { key(0.9) });
+        let w = WordBounds::of(&keys);
+        for gamma in [0.35f32, 0.5, 0.7, 0.89] {
+            assert_eq!(w.settle(key(gamma)), Some(0xfff), "gamma {gamma}");
+        }
+        // Past the wall every bin is shadowed, before the caster none; inside the caster's own
+        // spread of angles only the keys tell.
+        assert_eq!((w.settle(key(0.95)), w.settle(key(0.2))), (Some(!0), Some(0)));
+        assert_eq!(w.settle(key(0.305)), None);
+        // All alike: no gap, only the bounds.
+        let flat = WordBounds::of(&[key(0.5); 32]);
+        assert_eq!((flat.settle(key(0.4)), flat.settle(key(0.6))), (Some(0), Some(!0)));
     }
 
     #[test]

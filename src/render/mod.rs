@@ -38,7 +38,7 @@ pub use composite::{Composite, CompositeBindings};
 pub use cull::{Cull, CullBindings, CullCounts, CullLists};
 pub use exact_shadows::{ExactParams, ExactShadows, ExactShadowsBindings, ExactStats};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
-pub use hit_bounds::{HitBounds, HitBoundsBindings};
+pub use hit_bounds::{HitBounds, HitBoundsBindings, WordBounds};
 pub use integrate::{Integrate, IntegrateBindings, IntegrateInputs};
 pub use pass::{Pass, PassTiming};
 pub use ranges::{Ranges, RangesBindings};
@@ -349,8 +349,8 @@ impl ShadowVolume {
             }
             ShadowVolume::FirstHits => {
                 "Each light ray's first hit, as its angle from the eye: a point is shadowed where its light ray met \
-                 a triangle before it, compared exactly (no ray cells, no scan, a 16th of the memory at the default \
-                 grid). Grid surface shadows and the Cartesian grid keep the bits"
+                 a triangle before it, compared exactly (no ray cells, no scan, a seventh of the bits' memory at the \
+                 default grid). Grid surface shadows and the Cartesian grid keep the bits"
             }
         }
     }
@@ -1656,6 +1656,15 @@ impl Renderer {
             ShadowVolume::Bits => Ok(self.zero_unwritten(words)),
             ShadowVolume::FirstHits => self.first_hits_as_bits(&words, grid, false),
         }
+    }
+
+    /// The last frame's shadow volume as its buffer holds it, with its grid and form: the bits as
+    /// they are (words no frame cleared read as whatever they held), or the first hits' keys and
+    /// then their bounds ([`WordBounds::read`]). For tests of the passes' layouts.
+    pub fn read_volume(&self) -> Result<(Grid, ShadowVolume, Vec<u32>), GpuError> {
+        let (grid, volume, buffer) =
+            self.grid.as_ref().ok_or_else(|| GpuError::Readback("no frame rendered yet".into()))?;
+        Ok((*grid, *volume, bytemuck::pod_collect_to_vec(&self.ctx.read_buffer(buffer)?)))
     }
 
     /// A first-hit volume's keys as the bits' layers, under the last frame's mapping.
