@@ -6,6 +6,7 @@
 //
 //   lo = min k_b,   hi = max k_b,
 //   below = max { k_b : k_b <= m },   above = min { k_b : k_b > m },   mask = bits b with k_b > m,
+//   wide = above - below > (hi - lo) / 4   (stored as lo's lowest bit: lo rounded down to even),
 //
 // stored by fours past the planes x bins keys, five vectors a group of four words (words 4g to
 // 4g + 3, component c = i % 4):
@@ -15,7 +16,7 @@
 //
 // so that Integrate reads a plane's four words' bounds as vectors. A pixel with key K (its
 // angle's) reads a word as all lit where hi <= K (no light ray of it meets a triangle before the
-// pixel's angle), as all shadowed where lo > K, as `mask` where below <= K < above (no key lies
+// pixel's angle), as all shadowed where lo > K, as `mask` where wide and below <= K < above (no key lies
 // between the two, so a bin's key is greater than K exactly where it is greater than m), and only
 // otherwise compares its 32 keys. The gap at the middle is the one a word across a shadow's edge
 // has: its light rays meet a near caster on one side and a far surface (or nothing) on the other,
@@ -53,8 +54,13 @@ fn main(@builtin(global_invocation_id) id: vec3u) {
         above = select(above, min(above, key), up);
         mask |= select(0u, 1u << b, up);
     }
+    // Only a gap wider than a quarter of the keys' span is worth Integrate's three loads (a
+    // shadow's edge); in a slope of keys (a surface the light rays meet one after another) a pixel
+    // seldom falls between two neighbouring keys. The flag takes lo's lowest bit, which leaves lo
+    // rounded down by at most one: lo > K only where the true least key is (never a wrong word).
+    let wide = above - below > (hi - lo) / 4u;
     let at = grid.x * grid.z + 20u * (i / 4u) + i % 4u;
-    volume[at] = lo;
+    volume[at] = (lo & ~1u) | select(0u, 1u, wide);
     volume[at + 4u] = hi;
     volume[at + 8u] = below;
     volume[at + 12u] = above;

@@ -389,29 +389,32 @@ fn bounds_at(i: u32) -> u32 {
 fn hit_word(i: u32) -> u32 {
     let at = bounds_at(i);
     let c = i % 4u;
-    let lo = pick(grid[at], c);
+    let lo_wide = pick(grid[at], c);
+    let lo = lo_wide & ~1u;
     let hi = pick(grid[at + 1u], c);
-    let gap = pick(grid[at + 2u], c) <= pixel_key && pick(grid[at + 3u], c) > pixel_key;
+    let gap = (lo_wide & 1u) != 0u && pick(grid[at + 2u], c) <= pixel_key && pick(grid[at + 3u], c) > pixel_key;
     let mixed = lo <= pixel_key && hi > pixel_key && !gap;
     let settled = select(select(0u, ~0u, lo > pixel_key), pick(grid[at + 4u], c), gap);
     return select(settled, hit_bits(i, mixed), mixed);
 }
 
 // Words 4g to 4g + 3 of the plane whose words start at `base` (they come in fours, QUAD_RAYS):
-// their bounds as two vectors; where the pixel's key lies between a word's bounds, its gap (three
-// vectors more, read only where some lane needs them: a loop of 1 or 0 steps); the keys only of
-// the words neither settles.
+// their bounds as two vectors; where the pixel's key lies between a word's bounds and the word has
+// a wide gap, the gap (three vectors more, read only where some lane needs them: a loop of 1 or 0
+// steps); the keys only of the words neither settles.
 fn hit_quad(base: u32, g: u32) -> vec4u {
     let i = base + 4u * g;
     let at = bounds_at(i);
-    let lo = grid[at];
+    let lo_wide = grid[at];
+    let lo = lo_wide & vec4u(~1u);
     let hi = grid[at + 1u];
     let key = vec4u(pixel_key);
     let split = lo <= key & hi > key;
+    let wide = split & ((lo_wide & vec4u(1u)) != vec4u(0u));
     var gap = vec4<bool>(false);
     var gap_mask = vec4u(0u);
-    for (var t = 0u; t < select(0u, 1u, any(split)); t++) {
-        gap = split & grid[at + 2u] <= key & grid[at + 3u] > key;
+    for (var t = 0u; t < select(0u, 1u, any(wide)); t++) {
+        gap = wide & (grid[at + 2u] <= key) & (grid[at + 3u] > key);
         gap_mask = grid[at + 4u];
     }
     let mixed = split & !gap;

@@ -3,11 +3,11 @@
 //! bins 32 j .. 32 j + 31, split at the middle key m = lo + (hi - lo) / 2,
 //!
 //!   lo = min k_b,  hi = max k_b,  below = max { k_b <= m },  above = min { k_b > m },
-//!   mask = the bits b with k_b > m
+//!   mask = the bits b with k_b > m,  wide = above - below > (hi - lo) / 4
 //!
 //! stored by fours ([`WordBounds::read`]). Integrate reads a word whose keys all lie on one side of
-//! a pixel's from lo and hi alone, one whose keys the pixel's splits at the gap (below, above) from
-//! its mask, and compares the 32 keys of the others only. In a first-hit frame it runs where Scan
+//! a pixel's from lo and hi alone, one whose keys the pixel's splits at a wide gap (below, above)
+//! from its mask, and compares the 32 keys of the others only. In a first-hit frame it runs where Scan
 //! runs in a bit-grid frame.
 
 use super::util::{bindings, compute_pipeline, Kind};
@@ -69,8 +69,10 @@ impl HitBounds {
     }
 }
 
-/// One word's bounds (hit_bounds.wgsl): its least and greatest key, and the gap around the middle
-/// key between them, `below` and `above`, with `mask` the bits whose keys lie above it.
+/// One word's bounds (hit_bounds.wgsl): its least key (rounded down to even, its lowest bit holding
+/// `wide`) and greatest key, and the gap around the middle key between them, `below` and `above`,
+/// with `mask` the bits whose keys lie above it; `wide`: the gap spans more than a quarter of the
+/// keys' span (a shadow's edge), the only gap Integrate reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WordBounds {
     pub lo: u32,
@@ -78,6 +80,7 @@ pub struct WordBounds {
     pub below: u32,
     pub above: u32,
     pub mask: u32,
+    pub wide: bool,
 }
 
 impl WordBounds {
@@ -98,7 +101,8 @@ impl WordBounds {
                 below = below.max(k);
             }
         }
-        WordBounds { lo, hi, below, above, mask }
+        let wide = above - below > (hi - lo) / 4;
+        WordBounds { lo: lo & !1, hi, below, above, mask, wide }
     }
 
     /// Word `i`'s bounds (`i = plane * words + word`) in a first-hit volume for `grid`, as read
@@ -106,17 +110,18 @@ impl WordBounds {
     pub fn read(volume: &[u32], grid: &Grid, i: usize) -> WordBounds {
         let at = grid.planes as usize * grid.bins as usize + Self::PER_FOUR as usize * (i / 4) + i % 4;
         let [lo, hi, below, above, mask] = [0, 4, 8, 12, 16].map(|o| volume[at + o]);
-        WordBounds { lo, hi, below, above, mask }
+        WordBounds { lo: lo & !1, hi, below, above, mask, wide: lo & 1 == 1 }
     }
 
-    /// The word's shadow bits for a pixel's `key` where its bounds settle them (bit b: bin b's
-    /// first hit comes before the pixel, its key greater), or `None` where only its keys do.
+    /// The word's shadow bits for a pixel's `key` where its bounds settle them, as Integrate
+    /// settles them (bit b: bin b's first hit comes before the pixel, its key greater), or `None`
+    /// where only its keys do.
     pub fn settle(&self, key: u32) -> Option<u32> {
         if self.hi <= key {
             Some(0)
         } else if self.lo > key {
             Some(!0)
-        } else if self.below <= key && key < self.above {
+        } else if self.wide && self.below <= key && key < self.above {
             Some(self.mask)
         } else {
             None
@@ -201,6 +206,7 @@ mod tests {
         // Light rays 0..12 meet a near caster (large keys: small angles), the rest a far wall.
         let keys: [u32; 32] = std::array::from_fn(|b| if b < 12 { key(0.30 + b as f32 * 1e-3) } else { key(0.9) });
         let w = WordBounds::of(&keys);
+        assert!(w.wide);
         for gamma in [0.35f32, 0.5, 0.7, 0.89] {
             assert_eq!(w.settle(key(gamma)), Some(0xfff), "gamma {gamma}");
         }
@@ -210,7 +216,14 @@ mod tests {
         assert_eq!(w.settle(key(0.305)), None);
         // All alike: no gap, only the bounds.
         let flat = WordBounds::of(&[key(0.5); 32]);
+        assert!(!flat.wide);
         assert_eq!((flat.settle(key(0.4)), flat.settle(key(0.6))), (Some(0), Some(!0)));
+        // A slope of keys (a surface the light rays meet one after another): its middle gap is
+        // one step of 31, too narrow to be worth reading; its bounds still settle.
+        let slope: [u32; 32] = std::array::from_fn(|b| key(0.5 + b as f32 * 1e-3));
+        let w = WordBounds::of(&slope);
+        assert!(!w.wide && w.settle(key(0.5155)).is_none());
+        assert_eq!((w.settle(key(0.45)), w.settle(key(0.6))), (Some(0), Some(!0)));
     }
 
     #[test]
