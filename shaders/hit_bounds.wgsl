@@ -16,13 +16,13 @@
 //
 // so that Integrate reads a plane's four words' bounds as vectors. A pixel with key K (its
 // angle's) reads a word as all lit where hi <= K (no light ray of it meets a triangle before the
-// pixel's angle), as all shadowed where lo > K, as `mask` where wide and below <= K < above (no key lies
-// between the two, so a bin's key is greater than K exactly where it is greater than m), and only
-// otherwise compares its 32 keys. The gap at the middle is the one a word across a shadow's edge
-// has: its light rays meet a near caster on one side and a far surface (or nothing) on the other,
-// and a pixel whose view ray crosses that edge has its key between the two (docs/results.md,
-// session 48: Integrate ~22% shorter on the classroom). This pass takes the place of Scan: first
-// hits need no prefix OR.
+// pixel's angle), as all shadowed where lo > K, as `mask` where the gap is wide and
+// below <= K < above (no key lies between the two, so a bin's key is greater than K exactly where
+// it is greater than m), and only otherwise compares its 32 keys. The gap at the middle is the one
+// a word across a shadow's edge has: its light rays meet a near caster on one side and a far
+// surface (or nothing) on the other, and a pixel whose view ray crosses that edge has its key
+// between the two (docs/results.md, session 48: the classroom's Integrate 10-22% shorter). This
+// pass takes the place of Scan: first hits need no prefix OR.
 
 #import common
 

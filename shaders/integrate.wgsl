@@ -379,20 +379,21 @@ fn hit_bits(i: u32, mixed: bool) -> u32 {
 }
 
 // Where the bounds of word i start, in vectors: five a group of four words past the keys
-// (hit_bounds.wgsl), least keys, greatest keys, then the middle gap's lower and upper keys and mask.
+// (hit_bounds.wgsl): least keys, greatest keys, the middle gaps' lower and upper keys, masks.
 fn bounds_at(i: u32) -> u32 {
     return (f.grid.x * f.grid.z) / 4u + 5u * (i / 4u);
 }
 
-// Word i from its bounds, or from its gap's mask where the pixel's key lies in the gap, or from
-// its keys.
+// Word i from its bounds, or from its gap's mask where the gap is wide and the pixel's key lies
+// in it, or from its keys.
 fn hit_word(i: u32) -> u32 {
     let at = bounds_at(i);
     let c = i % 4u;
     let lo_wide = pick(grid[at], c);
     let lo = lo_wide & ~1u;
     let hi = pick(grid[at + 1u], c);
-    let gap = (lo_wide & 1u) != 0u && pick(grid[at + 2u], c) <= pixel_key && pick(grid[at + 3u], c) > pixel_key;
+    let wide = (lo_wide & 1u) != 0u;
+    let gap = wide && pick(grid[at + 2u], c) <= pixel_key && pick(grid[at + 3u], c) > pixel_key;
     let mixed = lo <= pixel_key && hi > pixel_key && !gap;
     let settled = select(select(0u, ~0u, lo > pixel_key), pick(grid[at + 4u], c), gap);
     return select(settled, hit_bits(i, mixed), mixed);

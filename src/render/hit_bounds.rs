@@ -7,8 +7,8 @@
 //!
 //! stored by fours ([`WordBounds::read`]). Integrate reads a word whose keys all lie on one side of
 //! a pixel's from lo and hi alone, one whose keys the pixel's splits at a wide gap (below, above)
-//! from its mask, and compares the 32 keys of the others only. In a first-hit frame it runs where Scan
-//! runs in a bit-grid frame.
+//! from its mask, and compares the 32 keys of the others only. In a first-hit frame it runs where
+//! Scan runs in a bit-grid frame.
 
 use super::util::{bindings, compute_pipeline, Kind};
 use crate::epipolar::GridMapping;
