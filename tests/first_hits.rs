@@ -47,7 +47,7 @@ fn first_hits_never_leak_light_out_of_a_closed_box() {
         s.grid = grid;
         let out = r.render(&s, 128, 96, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         assert!(out.variant.first_hits);
-        let brightest = out.scatter.pixels.iter().flat_map(|p| p.iter()).fold(0.0f32, |a, &b| a.max(b.abs()));
+        let brightest = brightest(&out.scatter);
         assert!(brightest <= 1e-6, "grid {grid}: light leaked out of the closed box: {brightest}");
     }
 }

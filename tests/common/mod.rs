@@ -91,6 +91,11 @@ pub fn sum(img: &Image) -> f64 {
     img.pixels.iter().map(|p| p.iter().map(|&c| c as f64).sum::<f64>()).sum()
 }
 
+/// The largest magnitude of any channel of any pixel (0 for a black image).
+pub fn brightest(img: &Image) -> f32 {
+    img.pixels.iter().flat_map(|p| p.iter()).fold(0.0f32, |a, &b| a.max(b.abs()))
+}
+
 /// Writes `img` normalised to its maximum as a PNG under `$EPIVOX_TEST_IMAGES`, when that is set.
 pub fn dump(name: &str, img: &Image) {
     if let Some(dir) = std::env::var_os("EPIVOX_TEST_IMAGES") {
