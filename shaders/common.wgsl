@@ -158,10 +158,10 @@ fn angle_between(a: vec3f, b: vec3f) -> f32 {
 
 // atan2(y, x) from a polynomial for atan on [0, 1] and the octants' symmetries: within 1.7e-6 rad
 // (the polynomial's largest error, measured in f64) plus f32's rounding for points at least
-// 1e-37 from the origin (tests/shader_math.rs), and 0 at (0, 0). For
-// angles that only bin or bound (Voxelize's hit cells, Cull's ranges, which have margins above
-// it) and for the first hits' angles, which Integrate compares with a slack above it (voxelize.wgsl,
-// `first_hits`); never for the angles Integrate integrates over. The built-in atan2's range reduction and
+// 1e-37 from the origin (tests/shader_math.rs), and 0 at (0, 0). For angles that only bin or
+// bound (Voxelize's hit cells, Cull's ranges, which have margins above it) and for the first
+// hits' angles, which Integrate compares with a slack above it (voxelize.wgsl, `first_hits`);
+// never for the angles Integrate integrates over. The built-in atan2's range reduction and
 // quadrant logic, which llvmpipe runs in full for a SIMD group, cost a tenth of Cull's time at a
 // million triangles and of the classroom's Voxelize (session 31).
 fn atan2_approx(y: f32, x: f32) -> f32 {

@@ -396,14 +396,17 @@ fn hit_cell(s: InPlane, k: i32) -> i32 {
 
 // The first-hit volume (FIRST_HITS, common.wgsl `hit_key`): each bin's light ray keeps the least
 // angle at which a triangle meets it, one atomic max per bin. The angle is atan2_approx's: within
-// 1.7e-6 rad, and near the axis (t -> 0) 2.3e-5 of itself, below (the hit looks nearer the light,
-// never farther). Integrate compares it with the pixel's own angle moved on by HIT_SLACK, half a
-// plane's angle times sin(gamma): at the default grid's 2048 planes, even over one radian of
-// them, 2.4e-4 sin(gamma), more than six times the approximation's error at every angle, so the
-// pixel's own surface does not shadow itself. The built-in atan2 was a sixth of the classroom's Voxelize on llvmpipe
-// (docs/results.md, session 49); the image moved by 0.0008% (rel RMSE). A hit past the plane's last kept ray cell is left out, as in the bits (no pixel of the plane
-// reads a light ray that far, and a hit there shadows none of them); one before its first is kept
-// as it is (it shadows them all).
+// 1.7e-6 rad either way, and near the axis within 2.3e-5 of itself (there below: the hit looks
+// nearer the light): at every angle under 4e-5 sin(gamma) (tests/shader_math.rs), a fifth of the
+// slack Integrate compares it with on the classroom (HIT_SLACK: half a plane's angle times
+// sin(gamma), there 2048 planes over 0.83 rad), so a pixel's own surface does not shadow itself;
+// a hit moved away from the light lets light past it by no more than that angle. (Planes spread
+// over less than a tenth of a radian would leave the slack under the error: a surface's last bins
+// could then shadow themselves by that much.) The built-in atan2 was a sixth of the classroom's
+// Voxelize on llvmpipe, and the image moved by 0.0008% (rel RMSE; docs/results.md, session 49). A
+// hit past the plane's last kept ray cell is left out, as in the bits (no pixel of the plane reads
+// a light ray that far, and a hit there shadows none of them); one before its first is kept as it
+// is (it shadows them all).
 fn first_hits(x: u32, ks: vec2i, s: InPlane) {
     let row = x * f.grid.z;
     for (var k = ks.x; k <= ks.y; k++) {

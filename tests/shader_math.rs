@@ -140,8 +140,8 @@ fn atan2_approx_stays_within_its_bound_in_every_octant() {
 
 /// Voxelize's first hits take their angles from atan2_approx (voxelize.wgsl, `first_hits`), and
 /// Integrate compares them with the pixel's own angle moved on by half a plane's angle times
-/// sin(gamma) (integrate.wgsl `HIT_SLACK`): at the default grid's 2048 planes, even over one radian
-/// of them, 2.4e-4 sin(gamma). Where the approximation errs by more than that, a lit surface would
+/// sin(gamma) (integrate.wgsl `HIT_SLACK`): 2.4e-4 sin(gamma) at 2048 planes over one radian (the
+/// classroom's span is 0.83). Where the approximation errs by more than that, a lit surface would
 /// shadow itself. Its error must stay within a sixth of it, 4e-5 sin(gamma) (plus f32's rounding of
 /// the angle itself), over the half-plane the light rays' hits lie in (v >= 0), from 1e-6 rad of
 /// the axis to 1e-6 rad of its far side, where the polynomial's absolute bound alone (1.7e-6 rad)
