@@ -340,8 +340,8 @@ fn word(i: u32) -> u32 {
 //
 // The grid then holds each light ray's first hit (common.wgsl, `hit_key`), and a plane's "ray" is
 // its words of bins (ray x starts at word x * words): word i = x * words + j has bin 32 j + b's
-// bit set where that light ray's first hit lies before the pixel's own angle, compared exactly
-// (no ray cell). A word whose 32 keys all lie on one side of the pixel's is read from its bounds
+// bit set where that light ray's first hit lies before the pixel's own angle, compared as angles
+// (no ray cell; the hit's is atan2_approx's, voxelize.wgsl `first_hits`). A word whose 32 keys all lie on one side of the pixel's is read from its bounds
 // alone (hit_bounds.wgsl): most of them, as most words hold no shadow boundary. Of the others, a
 // word whose keys split into two groups with the pixel's key between them (a shadow's edge: a near
 // caster's light rays beside a far surface's) is read from its mask; only the rest compare keys.

@@ -349,8 +349,8 @@ impl ShadowVolume {
             }
             ShadowVolume::FirstHits => {
                 "Each light ray's first hit, as its angle from the eye: a point is shadowed where its light ray met \
-                 a triangle before it, compared exactly (no ray cells, no scan, a seventh of the bits' memory at the \
-                 default grid). Grid surface shadows and the Cartesian grid keep the bits"
+                 a triangle before it, compared as angles (no ray cells, no scan, a seventh of the bits' memory at \
+                 the default grid). Grid surface shadows and the Cartesian grid keep the bits"
             }
         }
     }
