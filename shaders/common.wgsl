@@ -42,6 +42,13 @@ override WHOLE_RAY_ITEMS: bool = false; // each Voxelize item holds all of a ray
 const FLAG_PHI_WRAPS: u32 = 2u;    // planes cover the full circle: plane P-1 neighbours plane 0
 const FLAG_NO_SCATTER: u32 = 16u;  // nothing scatters: Integrate writes zeros, the voxel passes are skipped
 const FLAG_HIDDEN_BLOCKS: u32 = 64u; // Cull tests large triangles' blocks of planes against the sun's pyramid
+const FLAG_PLANE_REACH: u32 = 512u; // Ranges wrote each plane's reach this frame: Voxelize's first hits stop there
+
+// The planes' reach (ranges.wgsl, Ranges::reach): per group of REACH_GROUP planes the greatest
+// visible z of the pixels that blend them, then from REACH_PLANES_AT each plane's last bin kept
+// (Ranges::REACH_GROUP and REACH_PLANES_AT on the CPU).
+const REACH_GROUP: u32 = 8u;
+const REACH_PLANES_AT: u32 = 1024u; // groups of the most planes a grid has (8192 / REACH_GROUP)
 
 struct Frame {
     // Camera: right/up/forward unit vectors; w holds tan(half fov x), tan(half fov y), near.

@@ -50,6 +50,10 @@
 // the sun (bit i: block i, cull.wgsl `hidden_blocks`): their items' bits would change nothing
 // after the scan, and they are skipped.
 @group(0) @binding(8) var<storage, read> hidden: array<u32>;
+// Per plane, the last bin its pixels' view rays reach (ranges.wgsl, `reach`: two past the bin of
+// the greatest z they reach, -1 for none), where the frame has FLAG_PLANE_REACH: the first hits
+// stop there.
+@group(0) @binding(9) var<storage, read> reach: array<i32>;
 
 // Private copies of the parameters, made at each entry point (common.wgsl, "Parameters").
 var<private> f: Frame;
@@ -406,10 +410,15 @@ fn hit_cell(s: InPlane, k: i32) -> i32 {
 // Voxelize on llvmpipe in three runs, and the image moved by 0.0008% (rel RMSE; docs/results.md,
 // session 49). A hit past the plane's last kept ray cell is left out, as in the bits (no pixel of
 // the plane reads a light ray that far, and a hit there shadows none of them); one before its
-// first is kept as it is (it shadows them all).
+// first is kept as it is (it shadows them all). Nor is a hit past the plane's reach kept
+// (FLAG_PLANE_REACH): no pixel's walk reads a light ray beyond its surface's bin (integrate.wgsl
+// `lit_plane`: a boundary at or past z_end ends it, and the bits after z_end in its last word only
+// make boundaries there), so the bins past the reach's change no pixel.
 fn first_hits(x: u32, ks: vec2i, s: InPlane) {
     let row = x * f.grid.z;
-    for (var k = ks.x; k <= ks.y; k++) {
+    let reached = (f.image.w & FLAG_PLANE_REACH) != 0u;
+    let last = select(ks.y, min(ks.y, reach[REACH_PLANES_AT + x]), reached);
+    for (var k = ks.x; k <= last; k++) {
         let q = hit_point(s, k);
         let gamma = atan2_approx(q.y, q.x);
         if (ray_cell(gamma) >= 0) {

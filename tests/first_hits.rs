@@ -10,13 +10,9 @@
 mod common;
 
 use common::*;
-use epivox::params::{Grid, Light};
+use epivox::params::Grid;
 use epivox::render::{Method, Pass, ShadowVolume, SurfaceShadows, WordBounds};
 use glam::Vec3;
-
-fn sun() -> Light {
-    Light::Directional { direction: Vec3::new(0.3, 1.0, 0.2).normalize(), irradiance: Vec3::splat(2.0) }
-}
 
 #[test]
 fn first_hits_match_the_reference_under_a_point_light_and_a_sun() {

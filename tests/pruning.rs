@@ -247,3 +247,51 @@ fn clearing_only_the_kept_cells_changes_no_bit() {
     assert!(kept.2.pixels == whole.2.pixels, "the final image differs with the kept cells' clear");
     assert!(kept.1.pixels.iter().any(|p| p[0] > 0.0), "nothing scatters");
 }
+
+/// Voxelize keeps no first hit past the farthest point the pixels that blend its plane reach
+/// (`Renderer::plane_reach`, Ranges' reach per group of planes): no pixel reads a light ray there,
+/// so no pixel changes. Checked bit for bit on the scattered light and the final image, for a sun
+/// over the occluder and over the built-in room, and for a point light far off screen; with the
+/// light on screen the planes wrap and the reach is not taken, so there the volume is the same
+/// key for key. Where it is taken, the volume only loses keys (each one it keeps is the key the
+/// frame without the reach has there), and it does lose some: otherwise the test could not fail.
+#[test]
+fn the_planes_reach_drops_only_hits_no_pixel_reads() {
+    let Some(mut r) = renderer() else { return };
+    let mut on_screen = base(point_light(Vec3::new(0.3, 2.6, -1.0)));
+    on_screen.camera.target = Vec3::new(0.0, 1.8, 0.0);
+    let mut room = epivox::scene::builtin_scene();
+    room.grid = Grid { planes: 384, rays: 64, bins: 256, ..Grid::default() };
+    room.light = sun();
+    let scenes = [
+        ("the occluder's sun", base(sun()), true),
+        ("the built-in room's sun", room, true),
+        ("a point light far off screen", base(point_light(Vec3::new(12.0, 3.0, 0.5))), true),
+        ("a point light on screen", on_screen, false),
+    ];
+    let mut dropped = 0usize;
+    for (name, s, reached) in &scenes {
+        let mut runs = Vec::new();
+        for reach in [true, false] {
+            r.plane_reach = reach;
+            let out = r.render(s, 80, 64, Method::Vsv).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let (grid, _, words) = r.read_volume().unwrap_or_else(|e| panic!("{name}: {e}"));
+            let keys = words[..(grid.planes * grid.bins) as usize].to_vec();
+            runs.push((out.scatter, out.hdr, keys));
+        }
+        let ((scatter, hdr, kept), (scatter_all, hdr_all, all)) = (&runs[0], &runs[1]);
+        assert!(scatter.pixels.iter().any(|p| p[0] > 0.0), "{name}: nothing scatters");
+        assert!(scatter.pixels == scatter_all.pixels, "{name}: the scattered light changed");
+        assert!(hdr.pixels == hdr_all.pixels, "{name}: the final image changed");
+        for (i, (&k, &a)) in kept.iter().zip(all).enumerate() {
+            assert!(k == 0 || k == a, "{name}: key {i} is {k:#x} with the reach, {a:#x} without");
+        }
+        let lost = all.iter().filter(|&&a| a != 0).count() - kept.iter().filter(|&&k| k != 0).count();
+        if !reached {
+            assert_eq!(lost, 0, "{name}: the planes wrap, yet keys were dropped");
+        }
+        dropped += lost;
+    }
+    r.plane_reach = true;
+    assert!(dropped > 0, "no scene dropped a key past its planes' reach");
+}

@@ -28,6 +28,10 @@ pub const FLAG_EXACT_SHADOWS: u32 = 128;
 /// ([`super::ShadowVolume::FirstHits`]): set by the renderer. Read on the CPU only, like
 /// [`FLAG_GRID_SHADOWS`].
 pub const FLAG_FIRST_HITS: u32 = 256;
+/// Ranges wrote each plane's reach this frame ([`super::Ranges::reach`]), and Voxelize keeps no
+/// first hit past it: set by the renderer on a first-hit frame that prunes, unless
+/// [`super::Renderer::plane_reach`] is off.
+pub const FLAG_PLANE_REACH: u32 = 512;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
 #[repr(C)]

@@ -53,7 +53,7 @@ pub use shadow_map::{
 pub use shadow_pyramid::{DepthPyramid, EyeInputs, EyePyramid, MapInputs, ShadowPyramid, ShadowPyramidBindings};
 pub use surface::{EyeDrawing, Surface, SurfaceBindings, SurfaceCullBindings, SurfaceTargets};
 pub use variant::{Specialised, Variant, VariantPipelines};
-pub use voxelize::{Voxelize, VoxelizeBindings};
+pub use voxelize::{Voxelize, VoxelizeBindings, VoxelizeInputs};
 
 use crate::epipolar::GridMapping;
 use crate::gpu::{GpuContext, GpuError, GpuTimer, ShaderLibrary};
@@ -585,6 +585,11 @@ pub struct Renderer {
     /// past a plane's last read cell and 23% before its first, where they now fold into one
     /// (docs/results.md, session 33).
     pub prune_plane_rays: bool,
+    /// Voxelize keeps, per plane, no first hit past the farthest point its pixels' view rays reach
+    /// (which Ranges takes from the depth: [`Ranges::reach`]; frames whose planes wrap round the
+    /// circle keep every bin; part of pruning: off with `prune`, and on its own only to compare,
+    /// `tests/pruning.rs`). The image is the same to the bit (docs/results.md, session 49).
+    pub plane_reach: bool,
     /// Whether the last frame's map was fitted ([`Renderer::read_shadow_fit`]).
     last_fitted: bool,
     /// The fitted rectangle's aspect, from a frame's fit to the next frames' map
@@ -694,6 +699,7 @@ impl Renderer {
             exact_first_capacity: None,
             adaptive_pixels: true,
             prune_plane_rays: true,
+            plane_reach: true,
             last_fitted: false,
             fit_readback,
             fit_aspect: None,
@@ -977,7 +983,9 @@ impl Renderer {
         p.exact_shadows.bind(d, &self.frame_buffer, &self.shadow_uniforms, &geometry.gpu, &t.distance, &t.material);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
-        p.voxelize.bind(d, &self.frame_buffer, &geometry.gpu, bits, plane_rays, &p.cull);
+        let voxelize =
+            VoxelizeInputs { frame: &self.frame_buffer, grid: bits, plane_rays, reach: &p.ranges.reach, cull: &p.cull };
+        p.voxelize.bind(d, &geometry.gpu, voxelize);
         let scan = ScanBindings {
             frame_in: frame(),
             grid: bits.as_entire_binding(),
@@ -1218,6 +1226,12 @@ impl Renderer {
         let voxels = setup.method == Method::Vsv && scene.needs_scattering();
         if voxels && self.volume_of(scene, setup.method) == ShadowVolume::FirstHits {
             setup.uniforms.image.w |= frame::FLAG_FIRST_HITS;
+            // Ranges runs where the frame prunes, and takes the planes' reach there, where they do
+            // not wrap round the circle (no epipole in the image: ranges.wgsl).
+            let wraps = setup.uniforms.image.w & frame::FLAG_PHI_WRAPS != 0;
+            if self.prune && self.plane_reach && !wraps {
+                setup.uniforms.image.w |= frame::FLAG_PLANE_REACH;
+            }
         }
         if self.surface_shadows == SurfaceShadows::Exact
             && fits
@@ -1827,6 +1841,8 @@ mod layout_tests {
     #[test]
     fn dispatch_constants_match_wgsl() {
         assert_eq!(wgsl_u32("ranges.wgsl", "ROWS"), Ranges::ROWS);
+        assert_eq!(wgsl_u32("ranges.wgsl", "REACH_GROUP") as u64, Ranges::REACH_GROUP);
+        assert_eq!(wgsl_u32("ranges.wgsl", "REACH_PLANES_AT") as u64, Ranges::REACH_PLANES_AT);
         assert_eq!(wgsl_u32("shadow_fit.wgsl", "ROWS"), ShadowFit::ROWS);
         assert_eq!(wgsl_u32("cull.wgsl", "BLOCK"), Cull::BLOCK);
         assert_eq!(wgsl_u32("cull.wgsl", "PYRAMID_FIRST_LEVEL"), ShadowPyramid::FIRST_LEVEL);

@@ -180,9 +180,10 @@ impl Specialised {
     }
 
     /// Whether the pass builds a pipeline of its own for a first-hit volume
-    /// ([`Variant::first_hits`]): the passes that write and read it (Voxelize, Integrate).
+    /// ([`Variant::first_hits`]): the passes that write and read it (Voxelize, Integrate), and
+    /// Ranges, which takes the planes' reach for it.
     fn reads_volume(self) -> bool {
-        matches!(self, Specialised::LightGridAndSurfaceShadows | Specialised::All)
+        matches!(self, Specialised::LightAndGrid | Specialised::LightGridAndSurfaceShadows | Specialised::All)
     }
 
     /// Whether the pass builds a pipeline of its own for a work list of whole-ray items
@@ -484,15 +485,15 @@ mod tests {
     }
 
     /// A first-hit frame builds pipelines of its own for the passes that write and read the volume
-    /// (Voxelize and Cull, which share a `Specialised`, and Integrate), and shares every other
-    /// pass's with the bits' frames.
+    /// (Voxelize and Cull, which share a `Specialised`, and Integrate) and for Ranges (the planes'
+    /// reach), and shares every other pass's with the bits' frames.
     #[test]
     fn first_hits_specialise_only_the_volumes_passes() {
         let sun = Variant::new(false, &Phase::Isotropic, GREY);
         for (reads, own) in [
             (Specialised::LightGridAndSurfaceShadows, true),
             (Specialised::All, true),
-            (Specialised::LightAndGrid, false),
+            (Specialised::LightAndGrid, true),
             (Specialised::LightAndSurfaceShadows, false),
             (Specialised::LightPhaseAndMedium, false),
         ] {

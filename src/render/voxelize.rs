@@ -30,6 +30,19 @@ use super::util::{bindings, Kind};
 use super::variant::{Specialised, SpecialisedCompute, Variant};
 use crate::gpu::{GpuError, ShaderLibrary};
 
+/// What Voxelize reads and writes besides the scene's chunks and work list.
+pub struct VoxelizeInputs<'a> {
+    pub frame: &'a wgpu::Buffer,
+    /// The shadow volume it writes.
+    pub grid: &'a wgpu::Buffer,
+    /// Per plane, the ray cells its pixels read (`GridMapping::plane_rays`).
+    pub plane_rays: &'a wgpu::Buffer,
+    /// Per plane, the last bin its pixels reach ([`super::Ranges::reach`]).
+    pub reach: &'a wgpu::Buffer,
+    /// Cull's counters (the work list's length).
+    pub cull: &'a super::Cull,
+}
+
 bindings! {
     /// Voxelize's bind group for one chunk of triangles (voxelize.wgsl).
     VoxelizeBindings {
@@ -42,6 +55,7 @@ bindings! {
         counters: Kind::Storage,
         plane_rays: Kind::Storage,
         hidden: Kind::Storage,
+        reach: Kind::Storage,
     }
 }
 
@@ -117,15 +131,8 @@ impl Voxelize {
     }
 
     /// (Re)binds the scene's chunks and the grid; called when either changes.
-    pub fn bind(
-        &mut self,
-        device: &wgpu::Device,
-        frame: &wgpu::Buffer,
-        geometry: &super::SceneGpu,
-        grid: &wgpu::Buffer,
-        plane_rays: &wgpu::Buffer,
-        cull: &super::Cull,
-    ) {
+    pub fn bind(&mut self, device: &wgpu::Device, geometry: &super::SceneGpu, inputs: VoxelizeInputs) {
+        let VoxelizeInputs { frame, grid, plane_rays, reach, cull } = inputs;
         let l = &geometry.lists;
         self.bind_groups = geometry
             .nonempty_chunks()
@@ -140,6 +147,7 @@ impl Voxelize {
                     counters: cull.counters.as_entire_binding(),
                     plane_rays: plane_rays.as_entire_binding(),
                     hidden: l.hidden.as_entire_binding(),
+                    reach: reach.as_entire_binding(),
                 };
                 b.bind(device, &format!("Voxelize::bind_group[{i}]"), &self.layout)
             })

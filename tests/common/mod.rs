@@ -57,6 +57,11 @@ pub fn occluder_scene(light: Light) -> Scene {
     }
 }
 
+/// A sun from above and a little aside.
+pub fn sun() -> Light {
+    Light::Directional { direction: Vec3::new(0.3, 1.0, 0.2).normalize(), irradiance: Vec3::splat(2.0) }
+}
+
 pub fn point_light(p: Vec3) -> Light {
     point(p, 10.0)
 }
