@@ -72,15 +72,15 @@ fn plane_of(v: vec3f) -> f32 {
     return phi * (f32(f.grid.x) / f.b2.w) - 0.5;
 }
 
-// How far beyond its ends' plane coordinates a column's pixels are taken (plane units):
+// How far beyond its ends' plane coordinates a piece's pixels are taken (plane units):
 // atan2_approx's bound (2.5e-6 rad, tests/shader_math.rs) in planes, and 16 ulps of f32 at 2048
 // planes, a 250th of a plane, for the rounding.
 fn reach_slack() -> f32 {
     return 2.5e-6 * f32(f.grid.x) / f.b2.w + 4e-3;
 }
 
-// A column of pixels from p0 to p1 (its ends) with greatest visible z: into the reach of every
-// group its pixels' planes fall in.
+// A piece of a column, pixels p0 to p1 (its ends), with greatest visible z: into the reach of
+// every group its pixels' planes fall in.
 fn add_reach(p0: vec2u, p1: vec2u, z: f32) {
     let c0 = plane_of(pixel_dir(f, vec2f(p0)));
     let c1 = plane_of(pixel_dir(f, vec2f(p1)));
