@@ -29,8 +29,8 @@ pub const FLAG_EXACT_SHADOWS: u32 = 128;
 /// [`FLAG_GRID_SHADOWS`].
 pub const FLAG_FIRST_HITS: u32 = 256;
 /// Ranges wrote each plane's reach this frame ([`super::Ranges::reach`]), and Voxelize keeps no
-/// first hit past it: set by the renderer on a first-hit frame that prunes, unless
-/// [`super::Renderer::plane_reach`] is off.
+/// first hit past it: set by the renderer on a first-hit frame that prunes and whose planes do
+/// not wrap, unless [`super::Renderer::plane_reach`] is off.
 pub const FLAG_PLANE_REACH: u32 = 512;
 
 /// Mirrors `struct Frame` in `shaders/common.wgsl` field for field (checked by a layout test).
