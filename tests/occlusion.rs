@@ -40,7 +40,8 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
         let out = r.render(scene, 160, 120, Method::Vsv).unwrap_or_else(|e| panic!("{e}"));
         let counts = r.cull_counts().unwrap_or_else(|e| panic!("{e}"));
         let grid = r.read_grid().unwrap_or_else(|e| panic!("{e}"));
-        (out, counts, grid)
+        let entries = r.read_exact_stats().unwrap_or_else(|e| panic!("{e}")).map(|s| s.entries);
+        (out, counts, grid, entries)
     };
     // The first frame has no pyramid yet: it culls nothing and makes one at its end.
     let first = frame(&mut r, &room);
@@ -61,6 +62,10 @@ fn hidden_triangles_are_culled_and_the_shadow_volume_is_the_same() {
         on.1.culled_hidden
     );
     assert!(on.1.items < off.1.items, "culling removed no work: {} against {} items", on.1.items, off.1.items);
+    // Exact surface shadows (the default) leave the hidden triangles out of their lists too: the
+    // images below are the same.
+    let (Some(listed_on), Some(listed_off)) = (on.3, off.3) else { panic!("no exact shadows' counts") };
+    assert!(listed_on < listed_off, "the exact shadows listed {listed_on} entries with the test, {listed_off} without");
     for other in [&first, &off] {
         let differing = on.2.iter().zip(&other.2).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{differing} words of the shadow volume differ");

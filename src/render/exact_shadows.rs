@@ -11,7 +11,9 @@
 //! isolated pixels, many of them silhouettes the rasterizer and the reference's ray see apart
 //! (docs/results.md, session 44). And a frame needs no shadow map at all once the sun's
 //! pyramid of hidden triangles is made (Cull's test; `Renderer::render_frame` draws the map only
-//! to make it). Directional lights only: a point light's surfaces keep the cube map.
+//! to make it). Directional lights only: a point light's surfaces keep the cube map. That pyramid
+//! also keeps the triangles it shows hidden out of the lists, as Cull keeps them out of the
+//! volume: a nearer surface, which is listed, meets every ray toward the sun through them first.
 //!
 //! Each list entry holds, beside its triangle, the part of its tile the triangle's box covers, in
 //! one word: a point reads the planes of only the entries whose box holds it (most of a tile's
@@ -47,6 +49,7 @@ bindings! {
         material: Kind::Texture,
         sides: Kind::Storage,
         recorded: Kind::StorageRw,
+        pyramid: Kind::Storage,
     }
 }
 
@@ -275,7 +278,8 @@ impl ExactShadows {
     }
 
     /// Binds the frame's buffers, `geometry`'s triangles (in one chunk: [`SceneGpu::whole_triangles`];
-    /// else no bind group, and the renderer keeps the map) and the Surface targets.
+    /// else no bind group, and the renderer keeps the map), the Surface targets and the sun's
+    /// pyramid of block maxima (Cull's: a triangle it shows hidden is not listed).
     pub fn bind(
         &mut self,
         device: &wgpu::Device,
@@ -284,6 +288,7 @@ impl ExactShadows {
         geometry: &SceneGpu,
         distance: &wgpu::TextureView,
         material: &wgpu::TextureView,
+        pyramid: &wgpu::Buffer,
     ) {
         let (Some(tiles), Some(planes), Some(list), Some(recorded), Some(vis), Some(tris)) =
             (&self.tiles, &self.planes, &self.list, &self.recorded, &self.vis, geometry.whole_triangles())
@@ -304,6 +309,7 @@ impl ExactShadows {
             material: R::TextureView(material),
             sides: geometry.light_sides.as_entire_binding(),
             recorded: recorded.as_entire_binding(),
+            pyramid: pyramid.as_entire_binding(),
         };
         self.bind_group = Some(b.bind(device, "ExactShadows::bind_group", &self.layout));
     }

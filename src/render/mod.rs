@@ -980,7 +980,15 @@ impl Renderer {
         let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
-        p.exact_shadows.bind(d, &self.frame_buffer, &self.shadow_uniforms, &geometry.gpu, &t.distance, &t.material);
+        p.exact_shadows.bind(
+            d,
+            &self.frame_buffer,
+            &self.shadow_uniforms,
+            &geometry.gpu,
+            &t.distance,
+            &t.material,
+            pyramid,
+        );
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         let voxelize =
