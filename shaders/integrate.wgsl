@@ -272,13 +272,10 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, c_end: vec3f) -> vec3f {
     let n = select(0u, 1u + u32(clamp(floor(bc - offset), 0.0, f32(f.grid.z - 1u))), bc >= -0.25);
     let first = n / 32u;
     var carry = 0u;
-    if (n > 0u && n % 32u == 0u) { carry = word(base + first - 1u) >> 31u; }
+    // A loop of 1 or 0 steps, not an if: llvmpipe runs an if's body for every lane (masked), and
+    // a word read outside the walk costs several per-lane loads (hit_word).
+    for (var k = 0u; k < select(0u, 1u, n > 0u && n % 32u == 0u); k++) { carry = word(base + first - 1u) >> 31u; }
     let skipped = ~0u << (n % 32u);
-    // The bit before the next boundary walked (1: shadowed), toggled at each: every boundary is a
-    // change of the bit, so this is its value after the one before, with no read of the word
-    // there (the classroom's Integrate 0.975, 9 of 12 rounds, the same bits; session 39).
-    var state = carry;
-    if (n % 32u != 0u) { state = (word(base + first) >> (n % 32u - 1u)) & 1u; }
     // Words past `last` hold bins beyond z_end only: the ray's state at z_end is the last walked bit.
     let lanes = vec4u(0u, 1u, 2u, 3u);
     let z_per_bin = (f.ranges.w - f.ranges.z) / f32(f.grid.z);
@@ -304,9 +301,10 @@ fn lit_plane(r: Ray, base: u32, offset: f32, last: u32, c_end: vec3f) -> vec3f {
             // them by its offset, the other because its sample is the nearest there).
             let j = (g * 4u + c) * 32u + i;
             let z = z_of_bin_step(f, select(f32(j) + offset, -0.25, j == 0u), z_per_bin);
-            // A lit bin begins (q: 0 -> 1) where the bit goes clear, a shadowed one where it goes set.
-            let lit_after = state == 1u;
-            state ^= 1u;
+            // A lit bin begins (q: 0 -> 1) where the bit goes clear, a shadowed one where it goes set:
+            // bit j of the word in hand (no read of the bit before boundary n, which took a word
+            // outside the walk; session 50).
+            let lit_after = ((pick(q, c) >> i) & 1u) == 0u;
             if (z >= r.z_end) {
                 // The ray ends in the run before this boundary: lit up to z_end where this
                 // boundary starts a shadow (every later boundary sits at z_end and cancels).
