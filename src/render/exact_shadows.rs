@@ -53,6 +53,18 @@ bindings! {
     }
 }
 
+/// What ExactShadows reads besides the scene's triangles and its own buffers.
+pub struct ExactInputs<'a> {
+    pub frame: &'a wgpu::Buffer,
+    /// The shadow map's uniforms (the fitted rectangle's matrix).
+    pub shadow: &'a wgpu::Buffer,
+    /// Surface's targets: the distance to the nearest surface and (albedo, cos theta_i).
+    pub distance: &'a wgpu::TextureView,
+    pub material: &'a wgpu::TextureView,
+    /// The sun's pyramid of block maxima (Cull's: a triangle it shows hidden is not listed).
+    pub pyramid: &'a wgpu::Buffer,
+}
+
 /// Mirrors `struct ExactParams` in exact_shadows.wgsl (checked by a layout test).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
@@ -277,19 +289,10 @@ impl ExactShadows {
         }))
     }
 
-    /// Binds the frame's buffers, `geometry`'s triangles (in one chunk: [`SceneGpu::whole_triangles`];
-    /// else no bind group, and the renderer keeps the map), the Surface targets and the sun's
-    /// pyramid of block maxima (Cull's: a triangle it shows hidden is not listed).
-    pub fn bind(
-        &mut self,
-        device: &wgpu::Device,
-        frame: &wgpu::Buffer,
-        shadow: &wgpu::Buffer,
-        geometry: &SceneGpu,
-        distance: &wgpu::TextureView,
-        material: &wgpu::TextureView,
-        pyramid: &wgpu::Buffer,
-    ) {
+    /// Binds `inputs` and `geometry`'s triangles (in one chunk: [`SceneGpu::whole_triangles`]; else
+    /// no bind group, and the renderer keeps the map).
+    pub fn bind(&mut self, device: &wgpu::Device, geometry: &SceneGpu, inputs: ExactInputs) {
+        let ExactInputs { frame, shadow, distance, material, pyramid } = inputs;
         let (Some(tiles), Some(planes), Some(list), Some(recorded), Some(vis), Some(tris)) =
             (&self.tiles, &self.planes, &self.list, &self.recorded, &self.vis, geometry.whole_triangles())
         else {

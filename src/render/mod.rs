@@ -36,7 +36,7 @@ mod voxelize;
 
 pub use composite::{Composite, CompositeBindings};
 pub use cull::{Cull, CullBindings, CullCounts, CullLists};
-pub use exact_shadows::{ExactParams, ExactShadows, ExactShadowsBindings, ExactStats};
+pub use exact_shadows::{ExactInputs, ExactParams, ExactShadows, ExactShadowsBindings, ExactStats};
 pub use frame::{FrameError, FrameSetup, FrameUniforms, Method, CARTESIAN_TOLERANCE_DEG, TABLE_COLS, TABLE_ROWS};
 pub use hit_bounds::{HitBounds, HitBoundsBindings, WordBounds};
 pub use integrate::{Integrate, IntegrateBindings, IntegrateInputs};
@@ -980,15 +980,14 @@ impl Renderer {
         let Some(eye_pyramid) = &p.eye_pyramid.pyramid else { return };
         p.surface.bind(d, &self.frame_buffer, &geometry.gpu, eye_pyramid);
         p.shadow_fit.bind(d, &self.frame_buffer, &self.shadow_uniforms, &t.distance);
-        p.exact_shadows.bind(
-            d,
-            &self.frame_buffer,
-            &self.shadow_uniforms,
-            &geometry.gpu,
-            &t.distance,
-            &t.material,
+        let exact = ExactInputs {
+            frame: &self.frame_buffer,
+            shadow: &self.shadow_uniforms,
+            distance: &t.distance,
+            material: &t.material,
             pyramid,
-        );
+        };
+        p.exact_shadows.bind(d, &geometry.gpu, exact);
         p.ranges.bind(d, &self.frame_buffer, &t.distance);
         p.cull.bind(d, &self.frame_buffer, &geometry.gpu, &self.shadow_uniforms, pyramid);
         let voxelize =
